@@ -1,0 +1,205 @@
+//! Scenes: world-space triangles with shading data, materials and an optional camera,
+//! loaded from glTF 2.0 (`.gltf` with external or data-URI buffers, or `.glb`).
+
+mod accessor;
+mod buffers;
+mod glb;
+mod gltf_import;
+
+use std::path::{Path, PathBuf};
+
+use glam::{Vec2, Vec3};
+
+use crate::{Error, Result};
+
+/// One triangle in world space, with what shading needs at its corners.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneTriangle {
+    /// Corner positions, counter-clockwise seen from the front.
+    pub positions: [Vec3; 3],
+    /// Unit shading normals at the corners (the face normal when the file has none).
+    pub normals: [Vec3; 3],
+    /// TEXCOORD_0 at the corners (zero when the file has none).
+    pub uvs: [Vec2; 3],
+    /// Index into [`Scene::materials`].
+    pub material: u32,
+    /// Index into [`Scene::instances`]: the node this triangle came from.
+    pub instance: u32,
+}
+
+/// How a material's alpha is used (glTF `alphaMode`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AlphaMode {
+    /// Alpha is ignored.
+    Opaque,
+    /// Alpha below the cutoff makes the surface absent.
+    Mask,
+    /// Alpha blends; shadows treat such surfaces as opaque.
+    Blend,
+}
+
+/// The part of a glTF material penumbra uses: diffuse base colour.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// The material's name, if the file gives one.
+    pub name: Option<String>,
+    /// Linear RGBA base colour factor.
+    pub base_color_factor: [f32; 4],
+    /// Index into [`Scene::images`] of the base colour texture, if any.
+    pub base_color_texture: Option<u32>,
+    /// Alpha mode.
+    pub alpha_mode: AlphaMode,
+    /// Alpha cutoff for [`AlphaMode::Mask`].
+    pub alpha_cutoff: f32,
+    /// Whether back faces are shaded as front faces.
+    pub double_sided: bool,
+}
+
+impl Default for Material {
+    /// The glTF default material: white, opaque, single-sided.
+    fn default() -> Self {
+        Material {
+            name: None,
+            base_color_factor: [1.0; 4],
+            base_color_texture: None,
+            alpha_mode: AlphaMode::Opaque,
+            alpha_cutoff: 0.5,
+            double_sided: false,
+        }
+    }
+}
+
+/// Where an image's encoded bytes are (decoded only when a renderer needs them).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ImageSource {
+    /// A file next to the scene.
+    File(PathBuf),
+    /// Bytes inside the scene (a buffer view or a data URI), with their MIME type if given.
+    Embedded {
+        /// The encoded image (PNG or JPEG).
+        bytes: Vec<u8>,
+        /// MIME type from the file, if any.
+        mime_type: Option<String>,
+    },
+}
+
+/// A node of the glTF scene that carries a mesh, placed in the world.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Instance {
+    /// Index of the glTF node.
+    pub node: u32,
+    /// The node's name, if the file gives one.
+    pub name: Option<String>,
+    /// Object-to-world matrix (the product of the node path's transforms).
+    pub world_from_object: glam::Mat4,
+}
+
+/// Things skipped while loading that did not make the file unusable.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct LoadWarnings {
+    /// Primitives that are points or lines (not triangles), skipped.
+    pub skipped_non_triangle_primitives: usize,
+    /// Triangles with zero area (repeated or collinear corners), dropped: no ray can hit them.
+    pub degenerate_triangles: usize,
+    /// Triangle strips or fans converted to triangle lists.
+    pub converted_strips_and_fans: usize,
+}
+
+impl LoadWarnings {
+    /// One line per kind of warning that occurred.
+    pub fn messages(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.skipped_non_triangle_primitives > 0 {
+            out.push(format!(
+                "skipped {} point/line primitive(s)",
+                self.skipped_non_triangle_primitives
+            ));
+        }
+        if self.degenerate_triangles > 0 {
+            out.push(format!(
+                "dropped {} zero-area triangle(s)",
+                self.degenerate_triangles
+            ));
+        }
+        if self.converted_strips_and_fans > 0 {
+            out.push(format!(
+                "converted {} triangle strip/fan primitive(s) to lists",
+                self.converted_strips_and_fans
+            ));
+        }
+        out
+    }
+}
+
+/// A loaded scene: everything in world space, ready for the BVH builder.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The file it came from (for embedded scenes, a name).
+    pub source: PathBuf,
+    /// All triangles of the glTF scene, node transforms applied.
+    pub triangles: Vec<SceneTriangle>,
+    /// Materials; index 0.. as in the file, plus a default one at the end when a primitive has none.
+    pub materials: Vec<Material>,
+    /// Images referenced by materials, in file order.
+    pub images: Vec<ImageSource>,
+    /// The nodes that contributed triangles.
+    pub instances: Vec<Instance>,
+    /// The first perspective camera (node cameras first, then `asset.extras.camera`), aspect ratio left to the renderer.
+    pub camera: Option<crate::view::Camera>,
+    /// What was skipped or converted.
+    pub warnings: LoadWarnings,
+}
+
+/// Axis-aligned bounds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounds {
+    /// Smallest corner.
+    pub min: Vec3,
+    /// Largest corner.
+    pub max: Vec3,
+}
+
+impl Bounds {
+    /// The empty box (min = +inf, max = -inf), neutral for [`Bounds::grow`].
+    pub const EMPTY: Bounds = Bounds {
+        min: Vec3::INFINITY,
+        max: Vec3::NEG_INFINITY,
+    };
+
+    /// Grows the box to contain `p`.
+    pub fn grow(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    /// Length of the diagonal; the scene's size for relative tolerances.
+    pub fn diagonal(&self) -> f32 {
+        (self.max - self.min).length()
+    }
+}
+
+impl Scene {
+    /// Loads a `.gltf` or `.glb` file.
+    pub fn load(path: &Path) -> Result<Scene> {
+        let bytes = std::fs::read(path).map_err(|source| Error::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        Scene::from_bytes(&bytes, path)
+    }
+
+    /// Loads a scene from the bytes of a `.gltf` or `.glb` file; `path` names it in
+    /// errors, and its directory is where external buffers and images are looked for.
+    pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<Scene> {
+        gltf_import::import(bytes, path).map_err(|message| Error::scene(path, message))
+    }
+
+    /// Bounds of all triangles.
+    pub fn bounds(&self) -> Bounds {
+        let mut b = Bounds::EMPTY;
+        for t in &self.triangles {
+            t.positions.iter().for_each(|&p| b.grow(p));
+        }
+        b
+    }
+}
