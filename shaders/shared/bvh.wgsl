@@ -1,0 +1,23 @@
+// The flattened BVH as the GPU reads it: 32-byte nodes and 48-byte triangles.
+// Mirrors `src/layout.rs` (BvhNode, BvhTriangle); a naga test checks sizes and offsets.
+
+// One BVH node, 32 bytes. Inner node (count == 0): its children are nodes
+// `first` and `first + 1`, so one 64-byte read brings both child boxes.
+// Leaf (count > 0): triangles `first .. first + count`, stored in leaf order.
+struct BvhNode {
+    bmin: vec3<f32>,  // bytes 0..12: box minimum
+    first: u32,       // bytes 12..16: first child node (inner) or first triangle (leaf)
+    bmax: vec3<f32>,  // bytes 16..28: box maximum
+    count: u32,       // bytes 28..32: triangle count; 0 marks an inner node
+}
+
+// One triangle as the intersection test wants it, 48 bytes: a corner and the
+// two edges from it. Shading data lives in other buffers, indexed alike.
+struct BvhTriangle {
+    v0: vec3<f32>,         // bytes 0..12: corner 0
+    scene_index: u32,      // bytes 12..16: index of the triangle in the loaded scene
+    e1: vec3<f32>,         // bytes 16..28: corner 1 - corner 0
+    pad1: u32,             // bytes 28..32: unused
+    e2: vec3<f32>,         // bytes 32..44: corner 2 - corner 0
+    pad2: u32,             // bytes 44..48: unused
+}
