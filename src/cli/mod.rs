@@ -1,0 +1,65 @@
+//! Command-line interface definitions and dispatch.
+
+mod info;
+mod scene_arg;
+
+use clap::{Parser, Subcommand, ValueEnum};
+
+use penumbra::bvh::{BuildQuality, BvhSettings};
+
+/// Ray-traced soft shadows from area lights (multi-frusta tracing on wgpu).
+#[derive(Debug, Parser)]
+#[command(name = "penumbra", version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Load a scene, build its BVH and print statistics.
+    Info(info::InfoArgs),
+}
+
+/// BVH build options shared by the commands that build one.
+#[derive(Debug, Clone, clap::Args)]
+pub struct BvhArgs {
+    /// Largest number of triangles per BVH leaf (1..=255).
+    #[arg(long, default_value_t = BvhSettings::default().max_leaf_size, value_parser = clap::value_parser!(u32).range(1..=255))]
+    pub leaf_size: u32,
+    /// BVH build quality: build time against tree quality.
+    #[arg(long, value_enum, default_value_t = QualityArg::High)]
+    pub quality: QualityArg,
+}
+
+/// `--quality` values.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum QualityArg {
+    /// Quick build (obvhs fast preset).
+    Fast,
+    /// Balanced (obvhs medium preset).
+    Medium,
+    /// Slowest build, best tree (obvhs slow preset, no pre-splits); the default.
+    High,
+}
+
+impl BvhArgs {
+    /// The library settings these flags select.
+    pub fn settings(&self) -> BvhSettings {
+        BvhSettings {
+            max_leaf_size: self.leaf_size,
+            quality: match self.quality {
+                QualityArg::Fast => BuildQuality::Fast,
+                QualityArg::Medium => BuildQuality::Medium,
+                QualityArg::High => BuildQuality::High,
+            },
+        }
+    }
+}
+
+/// Runs the chosen command.
+pub fn run(cli: Cli) -> penumbra::Result<()> {
+    match cli.command {
+        Command::Info(args) => info::run(&args),
+    }
+}

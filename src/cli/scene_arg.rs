@@ -1,0 +1,30 @@
+//! The SCENE argument: a glTF/GLB path, or the name of a built-in scene.
+
+use std::path::Path;
+
+use penumbra::{Result, assets, scene::Scene};
+
+/// Loads the scene the argument names: none → the built-in default scene; a
+/// built-in scene's name (when no file of that name exists) → that scene;
+/// otherwise a file path.
+pub fn load_scene(arg: Option<&Path>) -> Result<Scene> {
+    let builtin = match arg {
+        None => Some(assets::default_scene()),
+        Some(p) if !p.exists() => p.to_str().and_then(assets::embedded_scene),
+        Some(_) => None,
+    };
+    match (builtin, arg) {
+        (Some(s), _) => Scene::from_bytes(s.glb, Path::new(s.file_name)),
+        (None, Some(p)) => Scene::load(p),
+        (None, None) => unreachable!("no argument always selects the default scene"),
+    }
+}
+
+/// Names of the built-in scenes, for help text.
+pub fn builtin_names() -> String {
+    assets::EMBEDDED_SCENES
+        .iter()
+        .map(|s| s.name)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
