@@ -37,6 +37,57 @@ pub enum Error {
         #[source]
         source: std::io::Error,
     },
+    /// No GPU adapter was found on any backend wgpu was built with.
+    #[error(
+        "no GPU adapter found (tried: {tried}); install a Vulkan driver; \
+         with no GPU: apt-get install mesa-vulkan-drivers"
+    )]
+    NoAdapter {
+        /// The backends that were asked for adapters, e.g. `Vulkan, Metal, Dx12`.
+        tried: String,
+    },
+    /// The adapter asked for (option or `PENUMBRA_ADAPTER`) matches none of those present.
+    #[error(
+        "no GPU adapter matches \"{wanted}\" (set by the adapter option or PENUMBRA_ADAPTER); \
+         give an index or part of a name from the adapters available: {}",
+        if available.is_empty() { "none".to_owned() } else { available.join("; ") }
+    )]
+    AdapterNotFound {
+        /// What was asked for.
+        wanted: String,
+        /// Every adapter present, as `index: name (backend, type)`.
+        available: Vec<String>,
+    },
+    /// The adapter refused to create a device.
+    #[error(
+        "could not create a GPU device: {0}; update the driver or pick another adapter with PENUMBRA_ADAPTER"
+    )]
+    Device(String),
+    /// A GPU buffer would exceed the adapter's size limit for one storage-buffer binding.
+    #[error(
+        "GPU buffer `{what}` needs {bytes} bytes, more than this adapter's limit of {limit} bytes per \
+         storage buffer; use a smaller scene or image, or an adapter with a larger limit"
+    )]
+    BufferTooLarge {
+        /// Which buffer (its label).
+        what: String,
+        /// The size it needs.
+        bytes: u64,
+        /// The adapter's limit.
+        limit: u64,
+    },
+    /// Any other GPU failure: a validation error, a failed buffer mapping, a lost device.
+    #[error("GPU error: {0}")]
+    Gpu(String),
+    /// An image could not be written or read back: unsupported extension,
+    /// pixel count not matching the size, or the encoder/decoder failed.
+    #[error("{path}: {message}")]
+    Output {
+        /// The image file.
+        path: PathBuf,
+        /// What is wrong, in words.
+        message: String,
+    },
 }
 
 impl Error {

@@ -21,9 +21,15 @@
 pub mod assets;
 pub mod bvh;
 mod error;
+pub mod filter;
+pub mod frame;
+pub mod gpu;
 pub mod layout;
+pub mod output;
 pub mod reference;
+pub mod sampling;
 pub mod scene;
+pub mod shaders;
 pub mod view;
 
 pub use error::{Error, Result};

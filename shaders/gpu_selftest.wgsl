@@ -1,0 +1,18 @@
+// GPU self-test: copies the `count` field of every BVH node into a u32 buffer.
+// Run by tests/gpu_smoke.rs to check adapter, buffers, timer and `#import` end to end.
+
+#import shared/bvh
+
+const WG_SIZE: u32 = 64u;
+
+@group(0) @binding(0) var<storage, read> nodes: array<BvhNode>;
+@group(0) @binding(1) var<storage, read_write> counts: array<u32>;
+
+@compute @workgroup_size(WG_SIZE)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let node_ix = gid.x;
+    // The last workgroup runs past the end; buffers may also be padded, so bound by both.
+    if node_ix < arrayLength(&nodes) && node_ix < arrayLength(&counts) {
+        counts[node_ix] = nodes[node_ix].count;
+    }
+}

@@ -1,0 +1,228 @@
+//! Adapter choice and device creation.
+
+use std::fmt;
+
+use crate::{Error, Result};
+
+/// Environment variable that picks the adapter when [`GpuOptions::adapter`] is `None`.
+pub const ADAPTER_ENV: &str = "PENUMBRA_ADAPTER";
+
+/// How to choose the GPU.
+#[derive(Clone, Debug, Default)]
+pub struct GpuOptions {
+    /// The adapter to use: an index into the enumerated list or a case-insensitive part of
+    /// its name. `None`: the env var [`ADAPTER_ENV`], else the best one found.
+    pub adapter: Option<String>,
+}
+
+/// What the chosen adapter is and can do, in one printable line.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct AdapterSummary {
+    /// Adapter name, e.g. `llvmpipe (LLVM 15.0.6, 256 bits)`.
+    pub name: String,
+    /// Graphics API wgpu drives it through.
+    pub backend: wgpu::Backend,
+    /// Discrete, integrated, virtual, CPU or other.
+    pub device_type: wgpu::DeviceType,
+    /// Driver name.
+    pub driver: String,
+    /// Driver version and details.
+    pub driver_info: String,
+    /// Smallest subgroup size the adapter may use.
+    pub subgroup_min_size: u32,
+    /// Largest subgroup size the adapter may use.
+    pub subgroup_max_size: u32,
+    /// The device was created with [`wgpu::Features::SUBGROUP`].
+    pub has_subgroups: bool,
+    /// The device was created with [`wgpu::Features::TIMESTAMP_QUERY`].
+    pub has_timestamps: bool,
+    /// Largest storage-buffer binding, in bytes.
+    pub max_storage_buffer_binding_size: u64,
+    /// Largest dispatch size in each dimension, in workgroups.
+    pub max_compute_workgroups_per_dimension: u32,
+}
+
+impl fmt::Display for AdapterSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} — {:?}, {:?}, driver {} {}, ",
+            self.name, self.backend, self.device_type, self.driver, self.driver_info
+        )?;
+        if self.has_subgroups {
+            write!(
+                f,
+                "subgroups {}..{}",
+                self.subgroup_min_size, self.subgroup_max_size
+            )?;
+        } else {
+            f.write_str("subgroups no")?;
+        }
+        let timestamps = if self.has_timestamps { "yes" } else { "no" };
+        write!(f, ", timestamps {timestamps}")
+    }
+}
+
+/// Everything needed to run compute work: the wgpu objects plus a summary of the adapter.
+#[derive(Debug)]
+pub struct GpuContext {
+    /// The wgpu instance the adapter came from.
+    pub instance: wgpu::Instance,
+    /// The chosen adapter.
+    pub adapter: wgpu::Adapter,
+    /// The device, created with the adapter's own limits.
+    pub device: wgpu::Device,
+    /// The device's queue.
+    pub queue: wgpu::Queue,
+    /// What the adapter is and which optional features the device has.
+    pub info: AdapterSummary,
+}
+
+impl GpuContext {
+    /// Chooses an adapter (see [`GpuOptions`]) and creates a device on it.
+    ///
+    /// Vulkan adapters come first (lavapipe in tests and CI); other backends are used when
+    /// Vulkan has none. `SUBGROUP` and `TIMESTAMP_QUERY` are enabled where offered.
+    pub fn new(opts: &GpuOptions) -> Result<GpuContext> {
+        // WGPU_DEBUG / WGPU_VALIDATION and backend options still come from the environment.
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle().with_env();
+        desc.backends = wgpu::Backends::all();
+        let instance = wgpu::Instance::new(desc);
+        let adapters = enumerate(&instance);
+
+        let wanted = match &opts.adapter {
+            Some(w) => Some(w.clone()),
+            None => std::env::var(ADAPTER_ENV).ok().filter(|w| !w.trim().is_empty()),
+        };
+        let adapter = match wanted {
+            Some(wanted) => pick_named(&adapters, &wanted)?,
+            None => pick_auto(&adapters)?,
+        };
+
+        let offered = adapter.features();
+        let required_features = offered & (wgpu::Features::SUBGROUP | wgpu::Features::TIMESTAMP_QUERY);
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("penumbra"),
+            required_features,
+            // The adapter's own limits, not the WebGPU defaults: scenes need big storage buffers.
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .map_err(|e| Error::Device(e.to_string()))?;
+
+        let adapter_info = adapter.get_info();
+        let features = device.features();
+        let limits = device.limits();
+        let info = AdapterSummary {
+            name: adapter_info.name,
+            backend: adapter_info.backend,
+            device_type: adapter_info.device_type,
+            driver: adapter_info.driver,
+            driver_info: adapter_info.driver_info,
+            subgroup_min_size: adapter_info.subgroup_min_size,
+            subgroup_max_size: adapter_info.subgroup_max_size,
+            has_subgroups: features.contains(wgpu::Features::SUBGROUP),
+            has_timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
+            max_storage_buffer_binding_size: limits.max_storage_buffer_binding_size,
+            max_compute_workgroups_per_dimension: limits.max_compute_workgroups_per_dimension,
+        };
+        Ok(GpuContext {
+            instance,
+            adapter,
+            device,
+            queue,
+            info,
+        })
+    }
+
+    /// Runs `f` inside validation and out-of-memory error scopes, turning an error that wgpu
+    /// reports into [`Error::Gpu`] (prefixed with `what`) instead of the default handler's panic.
+    pub fn capture_errors<R>(&self, what: &str, f: impl FnOnce() -> R) -> Result<R> {
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let value = f();
+        // Scopes are a stack: the inner one pops first.
+        let validation_error = pollster::block_on(validation.pop());
+        let oom_error = pollster::block_on(oom.pop());
+        match validation_error.or(oom_error) {
+            None => Ok(value),
+            Some(e) => Err(Error::Gpu(format!("{what}: {e}"))),
+        }
+    }
+}
+
+/// All adapters, Vulkan ones first, each group in the order the backend reports them.
+fn enumerate(instance: &wgpu::Instance) -> Vec<wgpu::Adapter> {
+    let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
+    adapters.extend(pollster::block_on(
+        instance.enumerate_adapters(wgpu::Backends::all() - wgpu::Backends::VULKAN),
+    ));
+    adapters
+}
+
+/// One line per adapter, as listed in [`Error::AdapterNotFound`].
+fn describe(adapters: &[wgpu::Adapter]) -> Vec<String> {
+    adapters
+        .iter()
+        .enumerate()
+        .map(|(i, a)| {
+            let info = a.get_info();
+            format!("{i}: {} ({:?}, {:?})", info.name, info.backend, info.device_type)
+        })
+        .collect()
+}
+
+/// The adapter `wanted` names: an index into `adapters`, else the first whose name contains it.
+fn pick_named(adapters: &[wgpu::Adapter], wanted: &str) -> Result<wgpu::Adapter> {
+    let key = wanted.trim();
+    let found = match key.parse::<usize>() {
+        Ok(index) => adapters.get(index),
+        Err(_) => {
+            let key = key.to_lowercase();
+            adapters
+                .iter()
+                .find(|a| a.get_info().name.to_lowercase().contains(&key))
+        }
+    };
+    found.cloned().ok_or_else(|| Error::AdapterNotFound {
+        wanted: wanted.to_owned(),
+        available: describe(adapters),
+    })
+}
+
+/// The best adapter: Vulkan before other backends, then discrete > integrated > virtual > CPU.
+fn pick_auto(adapters: &[wgpu::Adapter]) -> Result<wgpu::Adapter> {
+    let rank = |a: &wgpu::Adapter| {
+        let info = a.get_info();
+        let type_rank = match info.device_type {
+            wgpu::DeviceType::DiscreteGpu => 0,
+            wgpu::DeviceType::IntegratedGpu => 1,
+            wgpu::DeviceType::VirtualGpu => 2,
+            wgpu::DeviceType::Cpu => 3,
+            wgpu::DeviceType::Other => 4,
+        };
+        (info.backend != wgpu::Backend::Vulkan, type_rank)
+    };
+    // min_by_key keeps the first of equals, so enumeration order breaks ties.
+    adapters
+        .iter()
+        .min_by_key(|a| rank(a))
+        .cloned()
+        .ok_or_else(|| Error::NoAdapter {
+            tried: backend_names(wgpu::Instance::enabled_backend_features()),
+        })
+}
+
+/// `Vulkan, Metal, ...` for the backends in `backends`.
+fn backend_names(backends: wgpu::Backends) -> String {
+    let names: Vec<String> = wgpu::Backend::ALL
+        .into_iter()
+        .filter(|&b| backends.contains(b.into()))
+        .map(|b| format!("{b:?}"))
+        .collect();
+    if names.is_empty() {
+        "no backends (wgpu was built without any)".to_owned()
+    } else {
+        names.join(", ")
+    }
+}
