@@ -1,0 +1,553 @@
+//! The 4×4 discontinuity filter, CPU twin of `shaders/filter.wgsl`.
+//!
+//! Pixel `(x, y)` traced the 16 shadow rays of sample set
+//! `(x mod 4) + 4·(y mod 4)`, so any 4×4 window holds all 16 sets — 256 light
+//! samples. Averaging a window turns 16 rays per pixel into an estimate close
+//! to 256, as long as the neighbours see the same light: the filter takes only
+//! those whose depth and normal are close to the centre's, so shadows do not
+//! bleed across silhouettes and creases.
+//!
+//! The window is `x−1 ..= x+2`, `y−1 ..= y+2` (4 wide, so not centred), clipped
+//! to the image. [`filter_pixel`] is written the way the WGSL kernel is — one
+//! output pixel from its neighbours, `dy` outer, `dx` inner, increasing, sums in
+//! `f32` in that order — so that the GPU's result matches it to rounding
+//! (within 1e-6 for values of order 1). Accept/reject decisions compare floats
+//! against the tolerances; inputs that sit within rounding of a threshold may
+//! be decided differently on a GPU (which may fuse multiply-adds), so tests
+//! keep their inputs away from the thresholds.
+
+use bytemuck::{Pod, Zeroable};
+
+/// WGSL source of the filter kernel (entry point `main`, workgroup
+/// [`WORKGROUP_SIZE`]² invocations, one per pixel).
+///
+/// Bindings, group 0: 0 `params: FilterParams` (uniform), 1 `values:
+/// array<vec4<f32>>`, 2 `depth: array<f32>`, 3 `normal: array<vec4<f32>>`
+/// (16-byte stride, xyz used; see [`normals_for_gpu`]), all read-only storage,
+/// and 4 `filtered: array<vec4<f32>>` (read-write storage, the output).
+pub const FILTER_WGSL: &str = include_str!("../shaders/filter.wgsl");
+
+/// The kernel's workgroup is `WORKGROUP_SIZE × WORKGROUP_SIZE`; dispatch
+/// `ceil(width / 8) × ceil(height / 8)` workgroups. Equal to `WG_SIZE` in the WGSL
+/// (a test checks).
+pub const WORKGROUP_SIZE: u32 = 8;
+
+/// The filter's settings, 16 bytes; also the kernel's uniform (WGSL
+/// `FilterParams`, same member names; a test compares the layouts).
+#[repr(C)]
+#[derive(Pod, Zeroable, Clone, Copy, Debug, PartialEq)]
+pub struct FilterParams {
+    /// Image width in pixels (bytes 0..4).
+    pub width: u32,
+    /// Image height in pixels (bytes 4..8).
+    pub height: u32,
+    /// Relative depth tolerance (bytes 8..12): neighbour `n` is accepted by the
+    /// centre `c` only if `|d_n − d_c| ≤ depth_tolerance · d_c`. Too tight
+    /// (near 0) rejects neighbours on the same surface seen at a grazing angle,
+    /// and their noise stays; too loose lets shadow bleed across silhouettes
+    /// onto surfaces behind or in front.
+    pub depth_tolerance: f32,
+    /// Normal tolerance (bytes 12..16), a cosine: neighbour `n` is accepted only
+    /// if `dot(n_n, n_c) ≥ normal_tolerance`. Too tight (near 1) rejects
+    /// neighbours on curved surfaces, and their noise stays; too loose lets
+    /// shadow bleed around creases and corners (a wall's shadow onto the floor
+    /// beside it).
+    pub normal_tolerance: f32,
+}
+
+const _: () = assert!(size_of::<FilterParams>() == 16);
+
+impl FilterParams {
+    /// Default [`FilterParams::depth_tolerance`]: 5 % of the centre's depth.
+    pub const DEFAULT_DEPTH_TOLERANCE: f32 = 0.05;
+    /// Default [`FilterParams::normal_tolerance`]: cosine 0.9, about 26°.
+    pub const DEFAULT_NORMAL_TOLERANCE: f32 = 0.9;
+
+    /// Settings for a `width × height` image with the default tolerances.
+    pub fn new(width: u32, height: u32) -> Self {
+        FilterParams {
+            width,
+            height,
+            depth_tolerance: Self::DEFAULT_DEPTH_TOLERANCE,
+            normal_tolerance: Self::DEFAULT_NORMAL_TOLERANCE,
+        }
+    }
+
+    /// Number of pixels, `width · height`.
+    pub fn pixel_count(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+}
+
+/// Filters a whole image: [`filter_pixel`] for every pixel, row-major, top row first.
+///
+/// Per pixel, row-major: `values` = (r, g, b) irradiance and a = visibility
+/// (filtered together), `depth` = distance to the camera, 0 (or less) for
+/// "no hit", `normal` = unit shading normal.
+///
+/// # Panics
+///
+/// If a slice's length is not `params.width · params.height` (a caller bug).
+pub fn discontinuity_filter(
+    params: &FilterParams,
+    values: &[[f32; 4]],
+    depth: &[f32],
+    normal: &[[f32; 3]],
+) -> Vec<[f32; 4]> {
+    let n = params.pixel_count();
+    assert!(
+        values.len() == n && depth.len() == n && normal.len() == n,
+        "discontinuity_filter: {}×{} image needs {n} values, depths and normals, got {}, {}, {}",
+        params.width,
+        params.height,
+        values.len(),
+        depth.len(),
+        normal.len()
+    );
+    let mut filtered = Vec::with_capacity(n);
+    for y in 0..params.height {
+        for x in 0..params.width {
+            filtered.push(filter_pixel(params, values, depth, normal, x, y));
+        }
+    }
+    filtered
+}
+
+/// The filtered value of pixel `(x, y)`: the mean of `values` over the pixels
+/// of the window `x−1 ..= x+2`, `y−1 ..= y+2` (clipped to the image) whose
+/// depth and normal are close to the centre's (see [`FilterParams`]).
+///
+/// Neighbours with no hit (depth ≤ 0) are never used. A centre with no hit is
+/// returned unchanged. The centre always counts itself, whatever the
+/// tolerances, so the mean is never of nothing.
+///
+/// The GPU kernel computes exactly this, in the same order (the normal buffer
+/// there has a 16-byte stride: [`normals_for_gpu`]).
+///
+/// # Panics
+///
+/// If `(x, y)` is outside the image or a slice is shorter than the image (a caller bug).
+pub fn filter_pixel(
+    params: &FilterParams,
+    values: &[[f32; 4]],
+    depth: &[f32],
+    normal: &[[f32; 3]],
+    x: u32,
+    y: u32,
+) -> [f32; 4] {
+    assert!(
+        x < params.width && y < params.height,
+        "filter_pixel: ({x}, {y}) outside the {}×{} image",
+        params.width,
+        params.height
+    );
+    let width = params.width as usize;
+    let c_ix = y as usize * width + x as usize;
+    let d_c = depth[c_ix];
+    if d_c <= 0.0 {
+        return values[c_ix];
+    }
+    let n_c = normal[c_ix];
+    let mut sum = [0.0f32; 4];
+    let mut n_accepted = 0u32;
+    // i32 like the kernel, so the window may start at −1.
+    for dy in -1i32..=2 {
+        let ny = y as i32 + dy;
+        if ny < 0 || ny >= params.height as i32 {
+            continue;
+        }
+        for dx in -1i32..=2 {
+            let nx = x as i32 + dx;
+            if nx < 0 || nx >= params.width as i32 {
+                continue;
+            }
+            let ix = ny as usize * width + nx as usize;
+            let d_n = depth[ix];
+            let n_n = normal[ix];
+            // Written out rather than glam's dot to fix the order of the sum (the kernel's too).
+            let cos_nc = n_n[0] * n_c[0] + n_n[1] * n_c[1] + n_n[2] * n_c[2];
+            let similar = d_n > 0.0
+                && (d_n - d_c).abs() <= params.depth_tolerance * d_c
+                && cos_nc >= params.normal_tolerance;
+            if (dx == 0 && dy == 0) || similar {
+                // Component by component, as the kernel's vec4 addition.
+                let v = values[ix];
+                sum[0] += v[0];
+                sum[1] += v[1];
+                sum[2] += v[2];
+                sum[3] += v[3];
+                n_accepted += 1;
+            }
+        }
+    }
+    let n = n_accepted as f32;
+    [sum[0] / n, sum[1] / n, sum[2] / n, sum[3] / n]
+}
+
+/// The normals as the kernel's `normal` buffer wants them: `vec4<f32>` per
+/// pixel (16-byte stride, WGSL's alignment for `array<vec3<f32>>` too), w = 0.
+pub fn normals_for_gpu(normal: &[[f32; 3]]) -> Vec<[f32; 4]> {
+    normal.iter().map(|&[x, y, z]| [x, y, z, 0.0]).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::mem::offset_of;
+
+    const UP: [f32; 3] = [0.0, 1.0, 0.0];
+
+    /// A `width × height` image of one plane facing the camera at depth 2.
+    struct Frame {
+        params: FilterParams,
+        values: Vec<[f32; 4]>,
+        depth: Vec<f32>,
+        normal: Vec<[f32; 3]>,
+    }
+
+    impl Frame {
+        fn plane(width: u32, height: u32, value: impl Fn(u32, u32) -> [f32; 4]) -> Frame {
+            let params = FilterParams::new(width, height);
+            let n = params.pixel_count();
+            let values = (0..height)
+                .flat_map(|y| (0..width).map(move |x| (x, y)))
+                .map(|(x, y)| value(x, y));
+            Frame {
+                params,
+                values: values.collect(),
+                depth: vec![2.0; n],
+                normal: vec![UP; n],
+            }
+        }
+
+        fn ix(&self, x: u32, y: u32) -> usize {
+            (y * self.params.width + x) as usize
+        }
+
+        fn filter(&self) -> Vec<[f32; 4]> {
+            discontinuity_filter(&self.params, &self.values, &self.depth, &self.normal)
+        }
+    }
+
+    /// The window of `(x, y)` clipped to the image, as a list of pixels (an
+    /// independent statement of the footprint, not the kernel's loop).
+    fn window(params: &FilterParams, x: u32, y: u32) -> Vec<(u32, u32)> {
+        let xs = x.saturating_sub(1)..=(x + 2).min(params.width - 1);
+        let ys = y.saturating_sub(1)..=(y + 2).min(params.height - 1);
+        ys.flat_map(|wy| xs.clone().map(move |wx| (wx, wy))).collect()
+    }
+
+    fn close(a: [f32; 4], b: [f32; 4], tolerance: f32) -> bool {
+        a.iter()
+            .zip(&b)
+            .all(|(p, q)| (p - q).abs() <= tolerance * q.abs().max(1.0))
+    }
+
+    #[test]
+    fn params_defaults() {
+        let p = FilterParams::new(640, 480);
+        assert_eq!((p.width, p.height, p.pixel_count()), (640, 480, 640 * 480));
+        assert_eq!(p.depth_tolerance, 0.05);
+        assert_eq!(p.normal_tolerance, 0.9);
+        assert_eq!(bytemuck::bytes_of(&p).len(), 16);
+    }
+
+    #[test]
+    fn constant_image_stays_constant() {
+        let c = [0.3, 1.7, 0.01, 0.625];
+        let frame = Frame::plane(9, 6, |_, _| c);
+        for (i, out) in frame.filter().into_iter().enumerate() {
+            assert!(close(out, c, 1e-6), "pixel {i}: {out:?}");
+        }
+    }
+
+    #[test]
+    fn single_bright_pixel_spreads_over_its_window_footprint() {
+        for (bx, by) in [(3, 4), (0, 0), (7, 6)] {
+            let frame = Frame::plane(8, 7, |x, y| {
+                if (x, y) == (bx, by) {
+                    [16.0, 32.0, 8.0, 1.0]
+                } else {
+                    [0.0; 4]
+                }
+            });
+            let out = frame.filter();
+            for y in 0..7 {
+                for x in 0..8 {
+                    let win = window(&frame.params, x, y);
+                    let got = out[frame.ix(x, y)];
+                    // (x, y) sees the bright pixel iff bx ∈ [x−1, x+2] and by ∈ [y−1, y+2].
+                    let sees = (x as i32 - 1..=x as i32 + 2).contains(&(bx as i32))
+                        && (y as i32 - 1..=y as i32 + 2).contains(&(by as i32));
+                    assert_eq!(sees, win.contains(&(bx, by)));
+                    let w = if sees { 1.0 / win.len() as f32 } else { 0.0 };
+                    let expected = [16.0 * w, 32.0 * w, 8.0 * w, w];
+                    assert!(
+                        close(got, expected, 1e-6),
+                        "bright ({bx},{by}), pixel ({x},{y}): {got:?}"
+                    );
+                }
+            }
+        }
+        // In the interior the weight is exactly 1/16: footprint x ∈ [1, 4], y ∈ [2, 5].
+        let frame = Frame::plane(8, 8, |x, y| if (x, y) == (3, 4) { [16.0; 4] } else { [0.0; 4] });
+        let lit: Vec<(u32, u32)> = (0..8u32)
+            .flat_map(|y| (0..8u32).map(move |x| (x, y)))
+            .filter(|&(x, y)| frame.filter()[frame.ix(x, y)] != [0.0; 4])
+            .collect();
+        let footprint: Vec<(u32, u32)> = (2..=5).flat_map(|y| (1..=4).map(move |x| (x, y))).collect();
+        assert_eq!(lit, footprint);
+        assert!(
+            footprint
+                .iter()
+                .all(|&(x, y)| frame.filter()[frame.ix(x, y)] == [1.0; 4])
+        );
+    }
+
+    #[test]
+    fn depth_discontinuity_does_not_bleed() {
+        // Left half at depth 1 in shadow, right half at depth 1.5 lit: both face the camera.
+        let mut frame = Frame::plane(10, 6, |x, _| if x < 5 { [0.0; 4] } else { [1.0; 4] });
+        for y in 0..6 {
+            for x in 0..10 {
+                let ix = frame.ix(x, y);
+                frame.depth[ix] = if x < 5 { 1.0 } else { 1.5 };
+            }
+        }
+        let out = frame.filter();
+        for (i, v) in out.iter().enumerate() {
+            assert_eq!(*v, frame.values[i], "pixel {i}");
+        }
+        // Within the tolerance (4 % < 5 %) the same step is smoothed.
+        for y in 0..6 {
+            for x in 5..10 {
+                let ix = frame.ix(x, y);
+                frame.depth[ix] = 1.04;
+            }
+        }
+        let out = frame.filter();
+        let (edge, inside) = (out[frame.ix(4, 2)], out[frame.ix(1, 2)]);
+        assert!(edge[0] > 0.0 && edge[0] < 1.0, "{edge:?}");
+        assert_eq!(inside, [0.0; 4]);
+    }
+
+    #[test]
+    fn normal_discontinuity_does_not_bleed() {
+        // A crease at one depth: floor (up) on the left, wall (facing +x) on the right.
+        let mut frame = Frame::plane(10, 6, |x, _| if x < 5 { [0.25; 4] } else { [0.75; 4] });
+        for y in 0..6 {
+            for x in 5..10 {
+                let ix = frame.ix(x, y);
+                frame.normal[ix] = [1.0, 0.0, 0.0];
+            }
+        }
+        let out = frame.filter();
+        for (i, v) in out.iter().enumerate() {
+            assert_eq!(*v, frame.values[i], "pixel {i}");
+        }
+        // A gentle bend (cos 0.95 > 0.9) is smoothed.
+        let bent = [0.0, 0.95, (1.0f32 - 0.95 * 0.95).sqrt()];
+        for y in 0..6 {
+            for x in 5..10 {
+                let ix = frame.ix(x, y);
+                frame.normal[ix] = bent;
+            }
+        }
+        let edge = frame.filter()[frame.ix(4, 2)];
+        assert!(edge[0] > 0.25 && edge[0] < 0.75, "{edge:?}");
+    }
+
+    #[test]
+    fn sky_pixels_are_left_unchanged_and_not_used() {
+        // Sky (depth 0) carries a huge value that must never show up elsewhere.
+        let mut frame = Frame::plane(7, 5, |x, y| [x as f32, y as f32, 1.0, 0.5]);
+        let sky = [(0, 0), (3, 2), (4, 2), (6, 4), (2, 4)];
+        for &(x, y) in &sky {
+            let ix = frame.ix(x, y);
+            frame.depth[ix] = 0.0;
+            frame.values[ix] = [1e6, -1e6, 1e6, 1e6];
+            // A normal equal to everyone else's: only the depth marks it as sky.
+            frame.normal[ix] = UP;
+        }
+        let out = frame.filter();
+        for y in 0..5 {
+            for x in 0..7 {
+                let got = out[frame.ix(x, y)];
+                if sky.contains(&(x, y)) {
+                    assert_eq!(got, frame.values[frame.ix(x, y)]);
+                    continue;
+                }
+                let used: Vec<[f32; 4]> = window(&frame.params, x, y)
+                    .into_iter()
+                    .filter(|p| !sky.contains(p))
+                    .map(|(wx, wy)| frame.values[frame.ix(wx, wy)])
+                    .collect();
+                let mean = [0, 1, 2, 3].map(|k| used.iter().map(|v| v[k]).sum::<f32>() / used.len() as f32);
+                assert!(close(got, mean, 1e-6), "({x},{y}): {got:?} vs {mean:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn borders_of_small_images() {
+        for (width, height) in [(1, 1), (2, 3), (3, 2), (5, 7), (4, 1)] {
+            let frame = Frame::plane(width, height, |x, y| {
+                [x as f32 + 0.5, y as f32 * 0.25, 1.0, (x * y) as f32]
+            });
+            let out = frame.filter();
+            assert_eq!(out.len(), (width * height) as usize);
+            for y in 0..height {
+                for x in 0..width {
+                    let win = window(&frame.params, x, y);
+                    let mean = [0, 1, 2, 3].map(|k| {
+                        win.iter()
+                            .map(|&(wx, wy)| frame.values[frame.ix(wx, wy)][k])
+                            .sum::<f32>()
+                            / win.len() as f32
+                    });
+                    let got = out[frame.ix(x, y)];
+                    assert!(
+                        close(got, mean, 1e-6),
+                        "{width}×{height} ({x},{y}): {got:?} vs {mean:?}"
+                    );
+                }
+            }
+        }
+        let one = Frame::plane(1, 1, |_, _| [0.1, 0.2, 0.3, 0.4]);
+        assert_eq!(one.filter(), vec![[0.1, 0.2, 0.3, 0.4]]);
+    }
+
+    #[test]
+    fn periodic_pattern_of_the_16_sets_becomes_its_mean() {
+        // Set s = (x mod 4) + 4 (y mod 4) holds values that sum exactly in f32 in any order.
+        let set_value = |s: u32| {
+            [
+                s as f32,
+                0.25 * s as f32,
+                (15 - s) as f32 * 2.0,
+                if s.is_multiple_of(3) { 1.0 } else { 0.0 },
+            ]
+        };
+        let frame = Frame::plane(12, 10, |x, y| set_value(x % 4 + 4 * (y % 4)));
+        let mean = [0, 1, 2, 3].map(|k| (0..16).map(|s| set_value(s)[k]).sum::<f32>() / 16.0);
+        let out = frame.filter();
+        // The window x−1 ..= x+2 fits inside the image for x ∈ [1, width − 3].
+        for y in 1..=7 {
+            for x in 1..=9 {
+                assert_eq!(out[frame.ix(x, y)], mean, "({x},{y})");
+            }
+        }
+    }
+
+    #[test]
+    fn strict_tolerances_still_keep_the_centre() {
+        // Tolerances no neighbour can meet (and a non-unit normal): the centre alone, unchanged.
+        let mut frame = Frame::plane(5, 5, |x, y| [x as f32, y as f32, 0.0, 1.0]);
+        frame.params.depth_tolerance = -1.0;
+        frame.params.normal_tolerance = 2.0;
+        frame.normal[12] = [0.0, 0.1, 0.0];
+        assert_eq!(frame.filter(), frame.values);
+    }
+
+    #[test]
+    #[should_panic(expected = "needs 6 values")]
+    fn wrong_buffer_length_is_a_caller_bug() {
+        let params = FilterParams::new(2, 3);
+        discontinuity_filter(&params, &[[0.0; 4]; 5], &[1.0; 6], &[UP; 6]);
+    }
+
+    #[test]
+    fn normals_for_gpu_have_a_16_byte_stride() {
+        let packed = normals_for_gpu(&[[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+        assert_eq!(packed, [[1.0, 2.0, 3.0, 0.0], [4.0, 5.0, 6.0, 0.0]]);
+        assert_eq!(bytemuck::cast_slice::<_, u8>(&packed).len(), 32);
+    }
+
+    fn parse_and_validate(source: &str) -> naga::Module {
+        let module = naga::front::wgsl::parse_str(source)
+            .unwrap_or_else(|e| panic!("filter.wgsl does not parse:\n{}", e.emit_to_string(source)));
+        naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::all(),
+        )
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("filter.wgsl does not validate:\n{}", e.emit_to_string(source)));
+        module
+    }
+
+    #[test]
+    fn wgsl_validates_with_naga() {
+        let module = parse_and_validate(FILTER_WGSL);
+        let entry = module
+            .entry_points
+            .iter()
+            .find(|e| e.name == "main")
+            .expect("entry point `main`");
+        assert_eq!(entry.stage, naga::ShaderStage::Compute);
+        assert_eq!(entry.workgroup_size, [WORKGROUP_SIZE, WORKGROUP_SIZE, 1]);
+    }
+
+    #[test]
+    fn wgsl_bindings_are_as_documented() {
+        use naga::{AddressSpace, StorageAccess};
+        let module = parse_and_validate(FILTER_WGSL);
+        let mut bindings: Vec<(u32, u32, String, AddressSpace)> = module
+            .global_variables
+            .iter()
+            .filter_map(|(_, g)| {
+                let b = g.binding.as_ref()?;
+                Some((b.group, b.binding, g.name.clone().unwrap_or_default(), g.space))
+            })
+            .collect();
+        bindings.sort_by_key(|b| (b.0, b.1));
+        let read = AddressSpace::Storage {
+            access: StorageAccess::LOAD,
+        };
+        let read_write = AddressSpace::Storage {
+            access: StorageAccess::LOAD | StorageAccess::STORE,
+        };
+        let expected = [
+            (0, 0, "params", AddressSpace::Uniform),
+            (0, 1, "values", read),
+            (0, 2, "depth", read),
+            (0, 3, "normal", read),
+            (0, 4, "filtered", read_write),
+        ];
+        let expected: Vec<(u32, u32, String, AddressSpace)> = expected
+            .iter()
+            .map(|&(g, b, n, s)| (g, b, n.to_owned(), s))
+            .collect();
+        assert_eq!(bindings, expected);
+    }
+
+    #[test]
+    fn filter_params_layout_matches_wgsl() {
+        let module = parse_and_validate(FILTER_WGSL);
+        let ty = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some("FilterParams"))
+            .expect("struct FilterParams in filter.wgsl")
+            .1;
+        let naga::TypeInner::Struct { members, span } = &ty.inner else {
+            panic!("FilterParams is not a struct: {:?}", ty.inner);
+        };
+        let wgsl: Vec<(String, u32)> = members
+            .iter()
+            .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+            .collect();
+        let rust: Vec<(String, u32)> = [
+            ("width", offset_of!(FilterParams, width)),
+            ("height", offset_of!(FilterParams, height)),
+            ("depth_tolerance", offset_of!(FilterParams, depth_tolerance)),
+            ("normal_tolerance", offset_of!(FilterParams, normal_tolerance)),
+        ]
+        .iter()
+        .map(|&(n, o)| (n.to_owned(), o as u32))
+        .collect();
+        assert_eq!(*span as usize, size_of::<FilterParams>());
+        assert_eq!(*span, 16);
+        assert_eq!(wgsl, rust, "WGSL members (left) differ from Rust fields (right)");
+        assert_eq!(rust.iter().map(|m| m.1).collect::<Vec<_>>(), [0, 4, 8, 12]);
+    }
+}
