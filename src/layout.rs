@@ -44,8 +44,151 @@ pub struct BvhTriangle {
     pub pad2: u32,
 }
 
+/// One pixel of the G-buffer the primary pass writes and the shadow and
+/// shade passes read, 64 bytes (WGSL `GBufferTexel` in `shaders/shared/frame.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GBufferTexel {
+    /// Shadow-ray origin: the hit point moved off the surface along
+    /// `geo_normal` by the scene's ray offset (bytes 0..12).
+    pub origin: Vec3,
+    /// Distance from the eye to the hit along the camera ray; 0 when the
+    /// pixel sees no geometry (bytes 12..16).
+    pub depth: f32,
+    /// Unit shading normal, on the side facing the camera (bytes 16..28).
+    pub normal: Vec3,
+    /// Leaf-order index of the hit triangle; `u32::MAX` when none (bytes 28..32).
+    pub triangle: u32,
+    /// Unit geometric normal, on the side facing the camera (bytes 32..44).
+    pub geo_normal: Vec3,
+    /// Unused (bytes 44..48).
+    pub pad0: u32,
+    /// Linear RGB albedo (bytes 48..60).
+    pub albedo: Vec3,
+    /// Unused (bytes 60..64).
+    pub pad1: u32,
+}
+
+impl GBufferTexel {
+    /// True when the camera ray hit geometry.
+    pub fn is_hit(&self) -> bool {
+        self.depth > 0.0
+    }
+}
+
+/// Everything the shadow kernels need besides the G-buffer, the BVH and the
+/// light points, 112 bytes (WGSL `ShadowParams`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ShadowParams {
+    /// The light's corners in order `c, c+u, c+u+v, c+v` (xyz; w unused) (bytes 0..64).
+    pub light_corners: [[f32; 4]; 4],
+    /// `cross(edge_u, edge_v)`: the light emits to the side it points to (bytes 64..76).
+    pub light_normal: Vec3,
+    /// Shadow rays end at `t_max` (just short of the light sample at t = 1) (bytes 76..80).
+    pub t_max: f32,
+    /// Image width in pixels (bytes 80..84).
+    pub width: u32,
+    /// Image height in pixels (bytes 84..88).
+    pub height: u32,
+    /// First tile (x) of this dispatch; tiles are 4×4 pixels (bytes 88..92).
+    pub tile_origin_x: u32,
+    /// First tile (y) of this dispatch (bytes 92..96).
+    pub tile_origin_y: u32,
+    /// Tiles per row of this dispatch: the suspended-state slot of a tile is
+    /// `ty·tiles_x + tx` relative to the dispatch (bytes 96..100).
+    pub tiles_x: u32,
+    /// 0: start every tile; 1: resume the suspended ones (bytes 100..104).
+    pub resume: u32,
+    /// Loop iterations a vector may run in one dispatch before it saves its
+    /// state and stops (lavapipe ends loops after 65,535) (bytes 104..108).
+    pub iteration_budget: u32,
+    /// Tile rows of this dispatch (bytes 108..112).
+    pub tiles_y: u32,
+}
+
+/// Shading data of one triangle, in the same (leaf) order as
+/// [`BvhTriangle`], 48 bytes (WGSL `ShadingTriangle`): kept apart so traversal
+/// never loads it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ShadingTriangle {
+    /// Unit shading normal at corner 0 (bytes 0..12).
+    pub n0: Vec3,
+    /// Index into the material buffer (bytes 12..16).
+    pub material: u32,
+    /// Unit shading normal at corner 1 (bytes 16..28).
+    pub n1: Vec3,
+    /// Unused (bytes 28..32).
+    pub pad1: u32,
+    /// Unit shading normal at corner 2 (bytes 32..44).
+    pub n2: Vec3,
+    /// Unused (bytes 44..48).
+    pub pad2: u32,
+}
+
+/// One material as the primary pass reads it, 16 bytes (WGSL `GpuMaterial`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterial {
+    /// Linear RGB base colour factor (bytes 0..12).
+    pub base_color: Vec3,
+    /// Unused (bytes 12..16).
+    pub pad: u32,
+}
+
+/// The pinhole camera as the primary pass reads it, 64 bytes (WGSL `CameraParams`).
+///
+/// The ray through pixel `(x, y)` (centre `(x+½, y+½)`, row 0 at the top) is
+/// `eye + t·(forward + sx·right + sy·up)` with `sx = 2(x+½)/width − 1` and
+/// `sy = 1 − 2(y+½)/height`; `right` and `up` are pre-scaled by the field of view.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct CameraParams {
+    /// Eye position (bytes 0..12).
+    pub eye: Vec3,
+    /// Image width in pixels (bytes 12..16).
+    pub width: u32,
+    /// Unit view direction (bytes 16..28).
+    pub forward: Vec3,
+    /// Image height in pixels (bytes 28..32).
+    pub height: u32,
+    /// Right vector times `tan(fov_y/2)·aspect` (bytes 32..44).
+    pub right: Vec3,
+    /// Distance by which shadow-ray origins leave the surface (bytes 44..48).
+    pub ray_offset: f32,
+    /// Up vector times `tan(fov_y/2)` (bytes 48..60).
+    pub up: Vec3,
+    /// Unused (bytes 60..64).
+    pub pad: u32,
+}
+
+/// The light as the shade pass sees it, 48 bytes (WGSL `ShadeParams`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ShadeParams {
+    /// Centre of the quad light (bytes 0..12).
+    pub light_center: Vec3,
+    /// Area of the light (bytes 12..16).
+    pub light_area: f32,
+    /// Unit normal of the emitting side (bytes 16..28).
+    pub light_normal: Vec3,
+    /// Image width in pixels (bytes 28..32).
+    pub width: u32,
+    /// Emitted radiance, linear RGB (colour × intensity) (bytes 32..44).
+    pub radiance: Vec3,
+    /// Image height in pixels (bytes 44..48).
+    pub height: u32,
+}
+
+const _: () = assert!(size_of::<ShadeParams>() == 48);
+const _: () = assert!(size_of::<ShadingTriangle>() == 48);
+const _: () = assert!(size_of::<GpuMaterial>() == 16);
+const _: () = assert!(size_of::<CameraParams>() == 64);
 const _: () = assert!(size_of::<BvhNode>() == 32);
 const _: () = assert!(size_of::<BvhTriangle>() == 48);
+const _: () = assert!(size_of::<GBufferTexel>() == 64);
+const _: () = assert!(size_of::<ShadowParams>() == 112);
 
 impl BvhNode {
     /// True for a leaf (it holds triangles).
@@ -56,6 +199,8 @@ impl BvhNode {
 
 /// WGSL source of the BVH structs.
 pub const BVH_WGSL: &str = include_str!("../shaders/shared/bvh.wgsl");
+/// WGSL source of the per-frame structs (G-buffer, shadow parameters).
+pub const FRAME_WGSL: &str = include_str!("../shaders/shared/frame.wgsl");
 
 #[cfg(test)]
 mod tests {
@@ -138,6 +283,102 @@ mod tests {
                 pad1,
                 e2,
                 pad2
+            }),
+        );
+    }
+
+    #[test]
+    fn gbuffer_texel_layout_matches_wgsl() {
+        check(
+            FRAME_WGSL,
+            "GBufferTexel",
+            size_of::<GBufferTexel>(),
+            fields!(GBufferTexel {
+                origin,
+                depth,
+                normal,
+                triangle,
+                geo_normal,
+                pad0,
+                albedo,
+                pad1
+            }),
+        );
+    }
+
+    #[test]
+    fn shadow_params_layout_matches_wgsl() {
+        check(
+            FRAME_WGSL,
+            "ShadowParams",
+            size_of::<ShadowParams>(),
+            fields!(ShadowParams {
+                light_corners,
+                light_normal,
+                t_max,
+                width,
+                height,
+                tile_origin_x,
+                tile_origin_y,
+                tiles_x,
+                resume,
+                iteration_budget,
+                tiles_y
+            }),
+        );
+    }
+
+    #[test]
+    fn shading_layouts_match_wgsl() {
+        check(
+            FRAME_WGSL,
+            "ShadingTriangle",
+            size_of::<ShadingTriangle>(),
+            fields!(ShadingTriangle {
+                n0,
+                material,
+                n1,
+                pad1,
+                n2,
+                pad2
+            }),
+        );
+        check(
+            FRAME_WGSL,
+            "GpuMaterial",
+            size_of::<GpuMaterial>(),
+            fields!(GpuMaterial { base_color, pad }),
+        );
+        check(
+            FRAME_WGSL,
+            "CameraParams",
+            size_of::<CameraParams>(),
+            fields!(CameraParams {
+                eye,
+                width,
+                forward,
+                height,
+                right,
+                ray_offset,
+                up,
+                pad
+            }),
+        );
+    }
+
+    #[test]
+    fn shade_params_layout_matches_wgsl() {
+        check(
+            FRAME_WGSL,
+            "ShadeParams",
+            size_of::<ShadeParams>(),
+            fields!(ShadeParams {
+                light_center,
+                light_area,
+                light_normal,
+                width,
+                radiance,
+                height
             }),
         );
     }

@@ -1,9 +1,14 @@
-//! The CPU reference tracer: closest-hit and any-hit queries over the flat BVH,
-//! reading exactly the data the GPU reads ([`BvhNode`](crate::layout::BvhNode)s
+//! The CPU reference tracers: closest-hit and any-hit queries over the flat
+//! BVH, reading exactly the data the GPU reads ([`BvhNode`](crate::layout::BvhNode)s
 //! and [`BvhTriangle`](crate::layout::BvhTriangle)s in leaf order) with the same
-//! intersection arithmetic. It is the oracle for the GPU kernels.
+//! intersection arithmetic, the per-ray shadow oracle, and the CPU twin of the
+//! multi-frusta shadow kernel. They are the oracles for the GPU kernels.
 
 mod intersect;
+pub mod mft;
+pub mod primary;
+pub mod shade;
+pub mod shadow;
 mod traverse;
 
 pub use intersect::{RayBox, intersect_box, intersect_triangle, safe_inverse};

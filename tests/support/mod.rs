@@ -79,3 +79,136 @@ pub fn flat_grid(n: usize) -> Vec<[Vec3; 3]> {
     }
     out
 }
+
+/// Distance between segments `p1q1` and `p2q2` (Ericson, Real-Time Collision Detection, 5.1.9).
+pub fn segment_segment_distance(p1: Vec3, q1: Vec3, p2: Vec3, q2: Vec3) -> f32 {
+    let (d1, d2, r) = (q1 - p1, q2 - p2, p1 - p2);
+    let (a, e, f) = (d1.dot(d1), d2.dot(d2), d2.dot(r));
+    let (s, t);
+    if a <= f32::EPSILON && e <= f32::EPSILON {
+        return r.length();
+    }
+    if a <= f32::EPSILON {
+        s = 0.0;
+        t = (f / e).clamp(0.0, 1.0);
+    } else {
+        let c = d1.dot(r);
+        if e <= f32::EPSILON {
+            t = 0.0;
+            s = (-c / a).clamp(0.0, 1.0);
+        } else {
+            let b = d1.dot(d2);
+            let denom = a * e - b * b;
+            let s0 = if denom != 0.0 {
+                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let t0 = (b * s0 + f) / e;
+            if t0 < 0.0 {
+                t = 0.0;
+                s = (-c / a).clamp(0.0, 1.0);
+            } else if t0 > 1.0 {
+                t = 1.0;
+                s = ((b - c) / a).clamp(0.0, 1.0);
+            } else {
+                t = t0;
+                s = s0;
+            }
+        }
+    }
+    ((p1 + d1 * s) - (p2 + d2 * t)).length()
+}
+
+/// Distance from `p` to triangle `abc` (Ericson 5.1.5).
+pub fn point_triangle_distance(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> f32 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (p - a).length();
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return (p - b).length();
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return (p - (a + ab * v)).length();
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return (p - c).length();
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return (p - (a + ac * w)).length();
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (p - (b + (c - b) * w)).length();
+    }
+    let denom = 1.0 / (va + vb + vc);
+    let (v, w) = (vb * denom, vc * denom);
+    (p - (a + ab * v + ac * w)).length()
+}
+
+/// Whether a shadow ray from `origin` to `end` passes within `tol` of some
+/// triangle edge, or has an endpoint within `tol` of some triangle: the only
+/// places where two correct tracers may disagree because of rounding.
+pub fn near_an_edge_or_endpoint(corners: &[[Vec3; 3]], origin: Vec3, end: Vec3, tol: f32) -> bool {
+    corners.iter().any(|c| {
+        (0..3).any(|e| segment_segment_distance(origin, end, c[e], c[(e + 1) % 3]) <= tol)
+            || point_triangle_distance(origin, c[0], c[1], c[2]) <= tol
+            || point_triangle_distance(end, c[0], c[1], c[2]) <= tol
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+/// Compares two sets of occlusion masks ray by ray: returns (differing
+/// rays, total rays, differing rays NOT explained by an edge or endpoint).
+pub fn compare_masks(
+    a: &[u32],
+    b: &[u32],
+    gbuffer: &[penumbra::layout::GBufferTexel],
+    width: u32,
+    light_points: &[Vec3],
+    params: &penumbra::layout::ShadowParams,
+    corners: &[[Vec3; 3]],
+    tol: f32,
+) -> (usize, usize, Vec<String>) {
+    let mut differing = 0;
+    let mut total = 0;
+    let mut unexplained = Vec::new();
+    for (p, (&ma, &mb)) in a.iter().zip(b).enumerate() {
+        if (ma | mb) & penumbra::reference::shadow::MASK_SKY != 0 {
+            if ma != mb {
+                unexplained.push(format!("pixel {p}: sky flag differs ({ma:#x} vs {mb:#x})"));
+            }
+            continue;
+        }
+        total += 16;
+        let diff = (ma ^ mb) & 0xffff;
+        differing += diff.count_ones() as usize;
+        let (x, y) = (p as u32 % width, p as u32 / width);
+        let set = penumbra::sampling::pixel_set(x, y);
+        for j in 0..16 {
+            if diff & (1 << j) != 0 {
+                let o = gbuffer[p].origin;
+                let end = o + (light_points[set * 16 + j] - o) * params.t_max;
+                if !near_an_edge_or_endpoint(corners, o, end, tol) {
+                    unexplained.push(format!(
+                        "pixel ({x},{y}) ray {j}: {} vs {}",
+                        ma >> j & 1,
+                        mb >> j & 1
+                    ));
+                }
+            }
+        }
+    }
+    (differing, total, unexplained)
+}

@@ -1,0 +1,67 @@
+// Per-frame structs shared by the primary, shadow and shade passes.
+// Mirrors `src/layout.rs` (GBufferTexel, ShadowParams); a naga test checks sizes and offsets.
+
+// One G-buffer pixel, 64 bytes.
+struct GBufferTexel {
+    origin: vec3<f32>,      // bytes 0..12: shadow-ray origin (hit point moved off the surface)
+    depth: f32,             // bytes 12..16: eye-to-hit distance; 0 = no hit
+    normal: vec3<f32>,      // bytes 16..28: unit shading normal, camera side
+    triangle: u32,          // bytes 28..32: leaf-order triangle index, 0xffffffff = none
+    geo_normal: vec3<f32>,  // bytes 32..44: unit geometric normal, camera side
+    pad0: u32,              // bytes 44..48
+    albedo: vec3<f32>,      // bytes 48..60: linear RGB
+    pad1: u32,              // bytes 60..64
+}
+
+// Shadow-pass parameters, 112 bytes.
+struct ShadowParams {
+    light_corners: array<vec4<f32>, 4>,  // bytes 0..64: c, c+u, c+u+v, c+v
+    light_normal: vec3<f32>,             // bytes 64..76: cross(u, v), the emitting side
+    t_max: f32,                          // bytes 76..80: shadow rays cover t in (0, t_max)
+    width: u32,                          // bytes 80..84
+    height: u32,                         // bytes 84..88
+    tile_origin_x: u32,                  // bytes 88..92: first 4x4 tile of the dispatch
+    tile_origin_y: u32,                  // bytes 92..96
+    tiles_x: u32,                        // bytes 96..100: tiles per row of the dispatch
+    resume: u32,                         // bytes 100..104: 1 = resume suspended tiles
+    iteration_budget: u32,               // bytes 104..108: loop iterations before suspending
+    tiles_y: u32,                        // bytes 108..112: tile rows of the dispatch
+}
+
+// Shading data of one triangle (leaf order, like BvhTriangle), 48 bytes.
+struct ShadingTriangle {
+    n0: vec3<f32>,     // bytes 0..12: unit shading normal at corner 0
+    material: u32,     // bytes 12..16: index into the materials
+    n1: vec3<f32>,     // bytes 16..28
+    pad1: u32,         // bytes 28..32
+    n2: vec3<f32>,     // bytes 32..44
+    pad2: u32,         // bytes 44..48
+}
+
+// One material, 16 bytes.
+struct GpuMaterial {
+    base_color: vec3<f32>,  // bytes 0..12: linear RGB
+    pad: u32,               // bytes 12..16
+}
+
+// The pinhole camera, 64 bytes: ray = eye + t * (forward + sx * right + sy * up).
+struct CameraParams {
+    eye: vec3<f32>,      // bytes 0..12
+    width: u32,          // bytes 12..16
+    forward: vec3<f32>,  // bytes 16..28
+    height: u32,         // bytes 28..32
+    right: vec3<f32>,    // bytes 32..44: scaled by tan(fov/2) * aspect
+    ray_offset: f32,     // bytes 44..48: shadow-ray origin offset from the surface
+    up: vec3<f32>,       // bytes 48..60: scaled by tan(fov/2)
+    pad: u32,            // bytes 60..64
+}
+
+// The light as the shade pass sees it, 48 bytes.
+struct ShadeParams {
+    light_center: vec3<f32>,  // bytes 0..12
+    light_area: f32,          // bytes 12..16
+    light_normal: vec3<f32>,  // bytes 16..28: unit, emitting side
+    width: u32,               // bytes 28..32
+    radiance: vec3<f32>,      // bytes 32..44: colour * intensity
+    height: u32,              // bytes 44..48
+}

@@ -1,0 +1,40 @@
+//! CPU twin of the shade pass (`shaders/shade.wgsl`): diffuse BRDF toward the
+//! light centre times the visible fraction (the paper's separation of
+//! shading and visibility).
+
+use glam::{Vec3, Vec4};
+
+use super::shadow::{MASK_SKY, visibility};
+use crate::layout::{GBufferTexel, ShadeParams};
+use crate::view::QuadLight;
+
+/// Shade parameters for a light and image size.
+pub fn shade_params(light: &QuadLight, width: u32, height: u32) -> ShadeParams {
+    let n = light.area_normal();
+    ShadeParams {
+        light_center: light.center(),
+        light_area: n.length(),
+        light_normal: n.normalize(),
+        width,
+        radiance: light.color * light.intensity,
+        height,
+    }
+}
+
+/// `(radiance rgb, visibility)` of one pixel: the light treated as a point at
+/// its centre with its area and cosine falloff for the unshadowed term, times
+/// the mask's visible fraction. Sky pixels: black with visibility 1.
+pub fn shade_pixel(params: &ShadeParams, texel: &GBufferTexel, mask: u32) -> Vec4 {
+    if mask & MASK_SKY != 0 {
+        return Vec4::new(0.0, 0.0, 0.0, 1.0);
+    }
+    let v = visibility(mask);
+    let w = params.light_center - texel.origin;
+    let r2 = w.dot(w).max(1e-12);
+    let r = r2.sqrt();
+    let cos_surface = (texel.normal.dot(w) / r).max(0.0);
+    let cos_light = (-params.light_normal.dot(w) / r).max(0.0);
+    let irradiance = params.radiance * (params.light_area * cos_surface * cos_light / r2);
+    let radiance: Vec3 = texel.albedo / std::f32::consts::PI * irradiance * v;
+    radiance.extend(v)
+}

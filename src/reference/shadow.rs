@@ -1,0 +1,155 @@
+//! What a shadow ray is, shared by every shadow tracer (CPU and GPU): the
+//! per-ray oracle here traces each of a pixel's 16 rays alone with
+//! Möller–Trumbore over the BVH.
+//!
+//! Pixel `(x, y)` with a G-buffer hit traces 16 rays from its `origin` to the
+//! light points of its set `k = (x mod 4) + 4·(y mod 4)`: ray `j` is
+//! `origin + t·(p[16k + j] − origin)`, `0 < t < t_max`. Bit `j` of the
+//! pixel's mask is set when the ray is blocked:
+//! - by a triangle hit in that range;
+//! - by the surface itself: the sample is not above the tangent plane of the
+//!   geometric normal (`dot(geo_normal, d) ≤ 0`);
+//! - by the light's back: the origin is not on the emitting side of the light
+//!   (`dot(light_normal, origin − corner) ≤ 0`): all 16 bits.
+//!
+//! Pixels that see no geometry get [`MASK_SKY`] (no bit of 0..16 set):
+//! visibility is undefined there and the shade pass shows the background.
+
+use glam::{Vec3, Vec4Swizzles};
+
+use crate::bvh::Bvh;
+use crate::layout::{GBufferTexel, ShadowParams};
+use crate::reference::any_hit;
+use crate::sampling::{SAMPLES_PER_SET, pixel_set};
+use crate::view::QuadLight;
+
+/// Shadow rays end at `t_max = 1 − 2⁻¹²`, just short of the light sample, so
+/// geometry that holds the light (a luminaire's own mesh) does not block it.
+pub const SHADOW_T_MAX: f32 = 1.0 - 1.0 / 4096.0;
+/// All 16 rays blocked.
+pub const MASK_FULL: u32 = 0xffff;
+/// Marks a pixel without geometry.
+pub const MASK_SKY: u32 = 1 << 16;
+/// Iterations a vector runs per dispatch before suspending; below lavapipe's
+/// 65,535-iteration loop limit with room for the kernel's other loops.
+pub const ITERATION_BUDGET: u32 = 60_000;
+
+/// Shadow parameters for a light and image size (one dispatch over the whole image).
+pub fn shadow_params(light: &QuadLight, width: u32, height: u32) -> ShadowParams {
+    let c = light.corner;
+    let corners = [
+        c,
+        c + light.edge_u,
+        c + light.edge_u + light.edge_v,
+        c + light.edge_v,
+    ];
+    ShadowParams {
+        light_corners: corners.map(|p| p.extend(0.0).to_array()),
+        light_normal: light.area_normal(),
+        t_max: SHADOW_T_MAX,
+        width,
+        height,
+        tile_origin_x: 0,
+        tile_origin_y: 0,
+        tiles_x: width.div_ceil(4),
+        resume: 0,
+        iteration_budget: ITERATION_BUDGET,
+        tiles_y: height.div_ceil(4),
+    }
+}
+
+/// The light's corners as points.
+pub fn light_corners(params: &ShadowParams) -> [Vec3; 4] {
+    params.light_corners.map(|c| glam::Vec4::from_array(c).xyz())
+}
+
+/// Whether `origin` is on the emitting side of the light.
+pub fn faces_light(params: &ShadowParams, origin: Vec3) -> bool {
+    params.light_normal.dot(origin - light_corners(params)[0]) > 0.0
+}
+
+/// Bits of the rays of `set` that start below the surface's tangent plane.
+pub fn below_horizon_mask(texel: &GBufferTexel, set: usize, light_points: &[Vec3]) -> u32 {
+    (0..SAMPLES_PER_SET)
+        .filter(|&j| {
+            texel
+                .geo_normal
+                .dot(light_points[set * SAMPLES_PER_SET + j] - texel.origin)
+                <= 0.0
+        })
+        .fold(0, |m, j| m | (1 << j))
+}
+
+/// The mask a pixel starts from before any triangle is tested: sky, back of
+/// the light, or the rays below the horizon.
+pub fn initial_mask(texel: &GBufferTexel, set: usize, light_points: &[Vec3], params: &ShadowParams) -> u32 {
+    if !texel.is_hit() {
+        MASK_SKY
+    } else if !faces_light(params, texel.origin) {
+        MASK_FULL
+    } else {
+        below_horizon_mask(texel, set, light_points)
+    }
+}
+
+/// One pixel's occlusion mask, each ray traced alone (Möller–Trumbore any-hit).
+pub fn per_ray_mask(
+    bvh: &Bvh,
+    texel: &GBufferTexel,
+    set: usize,
+    light_points: &[Vec3],
+    params: &ShadowParams,
+) -> u32 {
+    let mut mask = initial_mask(texel, set, light_points, params);
+    if mask & MASK_SKY != 0 {
+        return mask;
+    }
+    for j in 0..SAMPLES_PER_SET {
+        if mask & (1 << j) == 0 {
+            let d = light_points[set * SAMPLES_PER_SET + j] - texel.origin;
+            if any_hit(bvh, texel.origin, d, params.t_max) {
+                mask |= 1 << j;
+            }
+        }
+    }
+    mask
+}
+
+/// Occlusion masks of a whole G-buffer (row-major), rows spread over all cores.
+pub fn per_ray_masks(
+    bvh: &Bvh,
+    gbuffer: &[GBufferTexel],
+    light_points: &[Vec3],
+    params: &ShadowParams,
+) -> Vec<u32> {
+    let (w, h) = (params.width as usize, params.height as usize);
+    assert_eq!(
+        gbuffer.len(),
+        w * h,
+        "G-buffer size does not match the parameters"
+    );
+    let mut masks = vec![0u32; w * h];
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let rows_per = h.div_ceil(threads).max(1);
+    std::thread::scope(|s| {
+        for (chunk_ix, chunk) in masks.chunks_mut(rows_per * w).enumerate() {
+            s.spawn(move || {
+                for (i, m) in chunk.iter_mut().enumerate() {
+                    let p = chunk_ix * rows_per * w + i;
+                    let set = pixel_set((p % w) as u32, (p / w) as u32);
+                    *m = per_ray_mask(bvh, &gbuffer[p], set, light_points, params);
+                }
+            });
+        }
+    });
+    masks
+}
+
+/// Fraction of a mask's 16 rays that reach the light (1 for sky pixels).
+pub fn visibility(mask: u32) -> f32 {
+    if mask & MASK_SKY != 0 {
+        1.0
+    } else {
+        (SAMPLES_PER_SET as u32 - (mask & MASK_FULL).count_ones()) as f32 / SAMPLES_PER_SET as f32
+    }
+}

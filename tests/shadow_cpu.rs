@@ -1,0 +1,97 @@
+//! The CPU twin of the multi-frusta kernel against the per-ray oracle on the
+//! generated scenes: the same occlusion masks up to rays that graze an edge,
+//! and the same masks whether or not a tile is suspended and resumed.
+
+mod support;
+
+use std::path::Path;
+
+use penumbra::bvh::{Bvh, BvhSettings};
+use penumbra::frame::{RAY_OFFSET_FRACTION, camera_params, gpu_materials, shading_triangles};
+use penumbra::reference::mft::mft_masks;
+use penumbra::reference::primary::primary_gbuffer;
+use penumbra::reference::shadow::{ITERATION_BUDGET, per_ray_masks, shadow_params};
+use penumbra::{assets, sampling, scene::Scene};
+use support::compare_masks;
+
+#[test]
+fn mft_twin_matches_per_ray_oracle_on_generated_scenes() {
+    for s in assets::EMBEDDED_SCENES {
+        let scene = Scene::from_bytes(s.glb, Path::new(s.file_name)).unwrap();
+        let view = s.view();
+        let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
+        let diag = scene.bounds().diagonal();
+        let (w, h) = (96, 80); // not a multiple of 16 on purpose
+        let cam = camera_params(&view.camera, w, h, diag * RAY_OFFSET_FRACTION);
+        let gbuffer = primary_gbuffer(
+            &bvh,
+            &shading_triangles(&scene, &bvh),
+            &gpu_materials(&scene),
+            &cam,
+        );
+        let params = shadow_params(&view.light, w, h);
+        let points = sampling::light_points(&view.light);
+        let oracle = per_ray_masks(&bvh, &gbuffer, &points, &params);
+        let (mft, counters) = mft_masks(&bvh, &gbuffer, &points, &params, ITERATION_BUDGET);
+        let corners: Vec<_> = scene.triangles.iter().map(|t| t.positions).collect();
+        let (differing, total, unexplained) = compare_masks(
+            &oracle,
+            &mft,
+            &gbuffer,
+            w,
+            &points,
+            &params,
+            &corners,
+            1e-4 * diag,
+        );
+        let occluded: u32 = oracle.iter().map(|m| (m & 0xffff).count_ones()).sum();
+        println!(
+            "{}: {differing} of {total} rays differ, {occluded} occluded; {counters:?}",
+            s.name
+        );
+        assert!(
+            occluded as usize > total / 20 && (occluded as usize) < total * 19 / 20,
+            "{}: the view must have both light and shadow",
+            s.name
+        );
+        assert!(
+            unexplained.is_empty(),
+            "{}: {:?}",
+            s.name,
+            &unexplained[..unexplained.len().min(10)]
+        );
+        assert!(
+            differing * 1000 <= total,
+            "{}: {differing} of {total} rays differ",
+            s.name
+        );
+    }
+}
+
+#[test]
+fn suspending_and_resuming_gives_the_same_masks() {
+    let s = assets::default_scene();
+    let scene = Scene::from_bytes(s.glb, Path::new(s.file_name)).unwrap();
+    let view = s.view();
+    let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
+    let (w, h) = (32, 32);
+    let cam = camera_params(
+        &view.camera,
+        w,
+        h,
+        scene.bounds().diagonal() * RAY_OFFSET_FRACTION,
+    );
+    let gbuffer = primary_gbuffer(
+        &bvh,
+        &shading_triangles(&scene, &bvh),
+        &gpu_materials(&scene),
+        &cam,
+    );
+    let params = shadow_params(&view.light, w, h);
+    let points = sampling::light_points(&view.light);
+    let (whole, c1) = mft_masks(&bvh, &gbuffer, &points, &params, u32::MAX);
+    let (pieces, c2) = mft_masks(&bvh, &gbuffer, &points, &params, 7);
+    assert_eq!(c1.suspensions, 0);
+    assert!(c2.suspensions > 10, "a budget of 7 iterations must suspend often");
+    assert_eq!(whole, pieces);
+}
