@@ -1,0 +1,39 @@
+// Shading: diffuse BRDF toward the light centre times the visible fraction from the shadow masks.
+// Dispatched by the renderer before the filter; CPU twin: src/reference/shade.rs.
+
+#import shared/frame
+
+const PI: f32 = 3.14159265358979;
+const MASK_SKY: u32 = 0x10000u;
+
+@group(0) @binding(0) var<uniform> params: ShadeParams;
+@group(0) @binding(1) var<storage, read> gbuffer: array<GBufferTexel>;
+@group(0) @binding(2) var<storage, read> masks: array<u32>;
+// Outputs for the filter: (radiance rgb, visibility), depth, normal.
+@group(0) @binding(3) var<storage, read_write> values: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read_write> depth: array<f32>;
+@group(0) @binding(5) var<storage, read_write> normal: array<vec4<f32>>;
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= params.width || gid.y >= params.height {
+        return;
+    }
+    let p = gid.y * params.width + gid.x;
+    let texel = gbuffer[p];
+    let mask = masks[p];
+    depth[p] = texel.depth;
+    normal[p] = vec4<f32>(texel.normal, 0.0);
+    if (mask & MASK_SKY) != 0u {
+        values[p] = vec4<f32>(0.0, 0.0, 0.0, 1.0);
+        return;
+    }
+    let visibility = f32(16u - countOneBits(mask & 0xffffu)) / 16.0;
+    let w = params.light_center - texel.origin;
+    let r2 = max(dot(w, w), 1e-12);
+    let r = sqrt(r2);
+    let cos_surface = max(dot(texel.normal, w) / r, 0.0);
+    let cos_light = max(-dot(params.light_normal, w) / r, 0.0);
+    let irradiance = params.radiance * (params.light_area * cos_surface * cos_light / r2);
+    values[p] = vec4<f32>(texel.albedo / PI * irradiance * visibility, visibility);
+}

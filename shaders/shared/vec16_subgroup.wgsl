@@ -1,0 +1,32 @@
+// The 16-wide vector as 16 lanes of one subgroup (ballot masked to the lane's 16-lane segment).
+// Needs Features::SUBGROUP and a fixed subgroup size that is a multiple of 16.
+
+// Vectors per workgroup = subgroup size / 16; the workgroup is one subgroup.
+override VEC16_PER_WG: u32 = 1u;
+override VEC16_WG_SIZE: u32 = 16u * VEC16_PER_WG;
+
+struct Vec16Ids {
+    @builtin(subgroup_invocation_id) subgroup_index: u32,
+    @builtin(workgroup_id) workgroup: vec3<u32>,
+}
+
+var<private> g_lane: u32;     // 0..16: this invocation's lane in its vector
+var<private> g_vector: u32;   // index of this vector in the dispatch
+var<private> g_sid: u32;      // lane in the subgroup
+
+fn vec16_init(ids: Vec16Ids) {
+    g_sid = ids.subgroup_index;
+    g_lane = ids.subgroup_index & 15u;
+    g_vector = ids.workgroup.x * VEC16_PER_WG + (ids.subgroup_index >> 4u);
+}
+
+fn ballot16(pred: bool) -> u32 {
+    let b = subgroupBallot(pred);
+    return (b[g_sid >> 5u] >> (g_sid & 16u)) & 0xffffu;
+}
+
+// Every lane of a vector computes the same value already (the kernels only
+// pass values loaded from the same address), so nothing needs exchanging.
+fn uniform16(value: u32) -> u32 {
+    return value;
+}

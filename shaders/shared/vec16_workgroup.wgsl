@@ -1,0 +1,39 @@
+// The 16-wide vector as one 16-invocation workgroup exchanging through workgroup memory.
+// Works on every device; kernels call vec16_init, ballot16 and uniform16 only.
+
+// One workgroup is one vector.
+const VEC16_WG_SIZE: u32 = 16u;
+
+// The builtins a kernel entry point takes to know its lane and vector.
+struct Vec16Ids {
+    @builtin(local_invocation_index) local_index: u32,
+    @builtin(workgroup_id) workgroup: vec3<u32>,
+}
+
+var<private> g_lane: u32;    // 0..16: this invocation's lane in its vector
+var<private> g_vector: u32;  // index of this vector in the dispatch
+
+var<workgroup> sh_vote: array<u32, 16>;
+var<workgroup> sh_word: u32;
+
+fn vec16_init(ids: Vec16Ids) {
+    g_lane = ids.local_index;
+    g_vector = ids.workgroup.x;
+}
+
+// Bit i set when lane i's `pred` holds. Every lane gets the same value, and
+// the result is uniform, so it may steer loops that contain barriers.
+fn ballot16(pred: bool) -> u32 {
+    sh_vote[g_lane] = select(0u, 1u << g_lane, pred);
+    let v = workgroupUniformLoad(&sh_vote);
+    return v[0] | v[1] | v[2] | v[3] | v[4] | v[5] | v[6] | v[7]
+        | v[8] | v[9] | v[10] | v[11] | v[12] | v[13] | v[14] | v[15];
+}
+
+// Lane 0's value, as a uniform value every lane can branch on.
+fn uniform16(value: u32) -> u32 {
+    if g_lane == 0u {
+        sh_word = value;
+    }
+    return workgroupUniformLoad(&sh_word);
+}

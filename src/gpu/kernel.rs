@@ -1,0 +1,146 @@
+//! Compute pipelines with explicit bind group layouts (with `layout: None`,
+//! wgpu drops bindings a kernel does not use and bind groups stop matching).
+
+use super::GpuContext;
+use crate::shaders::{self, Aliases};
+use crate::{Error, Result};
+
+/// What a binding of group 0 holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Binding {
+    /// `var<uniform>`.
+    Uniform,
+    /// `var<storage, read>`.
+    ReadOnly,
+    /// `var<storage, read_write>`.
+    ReadWrite,
+}
+
+/// A compute pipeline for entry point `main` and the layout of its group 0.
+#[derive(Debug)]
+pub struct Kernel {
+    /// The pipeline.
+    pub pipeline: wgpu::ComputePipeline,
+    /// Layout of bind group 0: binding `i` is `bindings[i]`.
+    pub layout: wgpu::BindGroupLayout,
+    /// The kernel's name (its file under `shaders/`).
+    pub name: String,
+}
+
+/// How much naga may guard a kernel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Checks {
+    /// Bounds checks and loop bounding, as wgpu does by default.
+    Checked,
+    /// No runtime checks: only for kernels whose every index the host has
+    /// validated (the BVH's node and triangle ranges, buffer sizes) or the
+    /// kernel clamps itself. Loop bounding doubles the cost of tight loops on
+    /// lavapipe (DESIGN.md).
+    Unchecked,
+}
+
+impl Kernel {
+    /// Assembles `main` with `aliases`, validates it with naga and builds its pipeline.
+    pub fn new(
+        ctx: &GpuContext,
+        main: &str,
+        aliases: Aliases<'_>,
+        bindings: &[Binding],
+        constants: &[(&str, f64)],
+        checks: Checks,
+    ) -> Result<Kernel> {
+        let source =
+            shaders::assemble(main, aliases).map_err(|e| Error::Gpu(format!("shader {main}: {e}")))?;
+        shaders::validate(&source).map_err(|e| Error::Gpu(format!("shader {main}: {e}")))?;
+        ctx.capture_errors(main, || {
+            let desc = wgpu::ShaderModuleDescriptor {
+                label: Some(main),
+                source: wgpu::ShaderSource::Wgsl(source.as_str().into()),
+            };
+            let module = match checks {
+                Checks::Checked => ctx.device.create_shader_module(desc),
+                // SAFETY: the caller vouches for the kernel's indices (see `Checks::Unchecked`).
+                Checks::Unchecked => unsafe {
+                    ctx.device
+                        .create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
+                },
+            };
+            let entries: Vec<wgpu::BindGroupLayoutEntry> = bindings
+                .iter()
+                .enumerate()
+                .map(|(i, b)| wgpu::BindGroupLayoutEntry {
+                    binding: i as u32,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: match b {
+                            Binding::Uniform => wgpu::BufferBindingType::Uniform,
+                            Binding::ReadOnly => wgpu::BufferBindingType::Storage { read_only: true },
+                            Binding::ReadWrite => wgpu::BufferBindingType::Storage { read_only: false },
+                        },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                })
+                .collect();
+            let layout = ctx
+                .device
+                .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some(main),
+                    entries: &entries,
+                });
+            let pipeline_layout = ctx
+                .device
+                .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some(main),
+                    bind_group_layouts: &[Some(&layout)],
+                    immediate_size: 0,
+                });
+            let pipeline = ctx
+                .device
+                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(main),
+                    layout: Some(&pipeline_layout),
+                    module: &module,
+                    entry_point: Some("main"),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants,
+                        zero_initialize_workgroup_memory: false,
+                    },
+                    cache: None,
+                });
+            Kernel {
+                pipeline,
+                layout,
+                name: main.to_owned(),
+            }
+        })
+    }
+
+    /// A bind group with `buffers[i]` (whole) at binding `i`.
+    pub fn bind(&self, ctx: &GpuContext, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(&self.name),
+            layout: &self.layout,
+            entries: &entries,
+        })
+    }
+}
+
+/// A uniform buffer holding `value`.
+pub fn uniform_buffer<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, value: &T) -> wgpu::Buffer {
+    use wgpu::util::DeviceExt;
+    ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: bytemuck::bytes_of(value),
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+    })
+}

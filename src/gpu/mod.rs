@@ -1,0 +1,22 @@
+//! The GPU side: choosing an adapter, creating buffers, reading them back, timing passes.
+//!
+//! Tests and the CLI get a [`GpuContext`] from [`GpuContext::new`]; the adapter comes from
+//! [`GpuOptions::adapter`], else the `PENUMBRA_ADAPTER` environment variable, else the best
+//! one found (Vulkan first, so lavapipe serves machines without a GPU). Everything that can
+//! fail for reasons outside the caller's control returns [`crate::Error`] instead of
+//! panicking: a missing driver, a buffer over the adapter's limit, a failed mapping.
+
+mod buffers;
+mod context;
+pub mod kernel;
+pub mod render;
+mod scene_buffers;
+pub mod shadow_pass;
+mod timer;
+
+pub use buffers::{empty_storage_buffer, read_buffer, storage_buffer};
+pub use context::{ADAPTER_ENV, AdapterSummary, GpuContext, GpuOptions};
+pub use render::{Frame, FrameSettings, Renderer};
+pub use scene_buffers::{GpuScene, validate_for_gpu};
+pub use shadow_pass::{ShadowPass, ShadowStats, VectorVariant};
+pub use timer::GpuTimer;

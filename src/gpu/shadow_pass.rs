@@ -1,0 +1,206 @@
+//! The multi-frusta shadow pass: a 16-wide vector per 4×4 tile traces the
+//! tile's 16 frusta (`shaders/shadow_mft.wgsl`).
+//!
+//! Lavapipe ends every loop after 65,535 iterations per invocation, counted
+//! across all loops (DESIGN.md). The kernel counts its steps; a vector that
+//! reaches its budget saves its traversal state and stops, and the pass
+//! dispatches again to resume the suspended tiles until none is left. So a
+//! tile with any amount of work gets the same answer as an uninterrupted one.
+
+use super::kernel::{Binding, Checks, Kernel, uniform_buffer};
+use super::{AdapterSummary, GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer};
+use crate::layout::ShadowParams;
+use crate::{Error, Result};
+
+/// 32-bit words of one tile's suspended state (see the kernel).
+const STATE_WORDS: u64 = 160;
+/// Tiles per dispatch along each axis: 128×128 tiles = 512×512 pixels, so
+/// the state buffer stays at 10 MiB and no dispatch runs for long.
+const CHUNK_TILES: u32 = 128;
+/// Resume rounds after which the pass gives up (a bug, not a scene, could cause it).
+const MAX_ROUNDS: u32 = 10_000;
+
+/// How the kernel's 16-wide vector is built from invocations (DESIGN.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum VectorVariant {
+    /// 16 lanes of a subgroup; needs subgroups of a fixed size that is a multiple of 16.
+    Subgroup,
+    /// A 16-invocation workgroup exchanging through workgroup memory; works everywhere.
+    Workgroup,
+}
+
+impl std::fmt::Display for VectorVariant {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            VectorVariant::Subgroup => "subgroup",
+            VectorVariant::Workgroup => "workgroup",
+        })
+    }
+}
+
+impl VectorVariant {
+    /// The variant for an adapter: `forced` if given (an error when the adapter cannot run it),
+    /// else subgroups when they are a fixed multiple of 16 wide, else workgroups.
+    /// Returns the variant and the number of vectors per workgroup.
+    pub fn choose(info: &AdapterSummary, forced: Option<VectorVariant>) -> Result<(VectorVariant, u32)> {
+        let size = info.subgroup_min_size;
+        let subgroup_ok = info.has_subgroups
+            && info.subgroup_min_size == info.subgroup_max_size
+            && size.is_multiple_of(16)
+            && (16..=64).contains(&size);
+        match forced {
+            Some(VectorVariant::Workgroup) => Ok((VectorVariant::Workgroup, 1)),
+            Some(VectorVariant::Subgroup) if !subgroup_ok => Err(Error::Gpu(format!(
+                "the subgroup vector needs subgroups of one fixed size that is a multiple of 16; \
+                 {} has {}subgroups of {}..{} lanes (on lavapipe set LP_NATIVE_VECTOR_WIDTH=512 \
+                 for 16-wide subgroups, or use --vector workgroup)",
+                info.name,
+                if info.has_subgroups { "" } else { "no " },
+                info.subgroup_min_size,
+                info.subgroup_max_size
+            ))),
+            Some(VectorVariant::Subgroup) => Ok((VectorVariant::Subgroup, size / 16)),
+            None if subgroup_ok => Ok((VectorVariant::Subgroup, size / 16)),
+            None => Ok((VectorVariant::Workgroup, 1)),
+        }
+    }
+
+    fn module(self) -> &'static str {
+        match self {
+            VectorVariant::Subgroup => "shared/vec16_subgroup",
+            VectorVariant::Workgroup => "shared/vec16_workgroup",
+        }
+    }
+}
+
+/// What a shadow pass did besides writing masks.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ShadowStats {
+    /// Dispatches (one per chunk plus one per resume round).
+    pub dispatches: u32,
+    /// Tile suspensions (tiles that ran out of their iteration budget, summed over rounds).
+    pub suspensions: u64,
+}
+
+/// The shadow pass's pipeline for one vector variant.
+#[derive(Debug)]
+pub struct ShadowPass {
+    kernel: Kernel,
+    /// The vector variant this pass runs.
+    pub variant: VectorVariant,
+    vectors_per_workgroup: u32,
+}
+
+impl ShadowPass {
+    /// Builds the pipeline; `variant` as in [`VectorVariant::choose`].
+    pub fn new(ctx: &GpuContext, variant: Option<VectorVariant>) -> Result<ShadowPass> {
+        let (variant, vectors_per_workgroup) = VectorVariant::choose(&ctx.info, variant)?;
+        let constants: Vec<(&str, f64)> = match variant {
+            VectorVariant::Subgroup => vec![("VEC16_PER_WG", f64::from(vectors_per_workgroup))],
+            VectorVariant::Workgroup => vec![],
+        };
+        use Binding::*;
+        let kernel = Kernel::new(
+            ctx,
+            "shadow_mft",
+            &[("shared/vec16", variant.module())],
+            &[
+                Uniform, ReadOnly, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadWrite, ReadWrite,
+            ],
+            &constants,
+            // Indices: BVH ranges validated by GpuScene::new, stack indices clamped,
+            // pixel and state slots bounded by the parameters the host sets here.
+            Checks::Unchecked,
+        )?;
+        Ok(ShadowPass {
+            kernel,
+            variant,
+            vectors_per_workgroup,
+        })
+    }
+
+    /// Traces the shadow masks of a whole image: `gbuffer` (`array<GBufferTexel>`,
+    /// width × height) and `light_points` (256 `vec4`s) in, `masks` (`array<u32>`) out.
+    /// `params` gives the light and image size; its tile fields are set here.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        gbuffer: &wgpu::Buffer,
+        light_points: &wgpu::Buffer,
+        masks: &wgpu::Buffer,
+        params: &ShadowParams,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> Result<ShadowStats> {
+        let tiles_x = params.width.div_ceil(4);
+        let tiles_y = params.height.div_ceil(4);
+        let chunk = CHUNK_TILES.min(tiles_x).max(1) as u64 * CHUNK_TILES.min(tiles_y).max(1) as u64;
+        let state = empty_storage_buffer(
+            ctx,
+            "shadow state",
+            chunk * STATE_WORDS * 4,
+            wgpu::BufferUsages::empty(),
+        )?;
+        let status = empty_storage_buffer(
+            ctx,
+            "shadow status",
+            16,
+            wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        )?;
+        let params_buf = uniform_buffer(ctx, "shadow params", params);
+        let bind = self.kernel.bind(
+            ctx,
+            &[
+                &params_buf,
+                &scene.nodes,
+                &scene.triangles,
+                gbuffer,
+                light_points,
+                masks,
+                &state,
+                &status,
+            ],
+        );
+        let mut stats = ShadowStats::default();
+        for ty0 in (0..tiles_y).step_by(CHUNK_TILES as usize) {
+            for tx0 in (0..tiles_x).step_by(CHUNK_TILES as usize) {
+                let mut p = *params;
+                p.tile_origin_x = tx0;
+                p.tile_origin_y = ty0;
+                p.tiles_x = CHUNK_TILES.min(tiles_x - tx0);
+                p.tiles_y = CHUNK_TILES.min(tiles_y - ty0);
+                let tiles = p.tiles_x * p.tiles_y;
+                let groups = tiles.div_ceil(self.vectors_per_workgroup);
+                for round in 0.. {
+                    if round == MAX_ROUNDS {
+                        return Err(Error::Gpu(format!(
+                            "shadow pass: tiles still suspended after {MAX_ROUNDS} rounds"
+                        )));
+                    }
+                    p.resume = u32::from(round > 0);
+                    ctx.queue.write_buffer(&params_buf, 0, bytemuck::bytes_of(&p));
+                    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+                    encoder.clear_buffer(&status, 0, None);
+                    {
+                        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                            label: Some("shadow/trace"),
+                            timestamp_writes: timer.as_deref_mut().and_then(|t| t.pass_writes("shadow")),
+                        });
+                        pass.set_pipeline(&self.kernel.pipeline);
+                        pass.set_bind_group(0, &bind, &[]);
+                        pass.dispatch_workgroups(groups, 1, 1);
+                    }
+                    ctx.queue.submit([encoder.finish()]);
+                    stats.dispatches += 1;
+                    let suspended = read_buffer::<u32>(ctx, &status, 0..4)?[0];
+                    if suspended == 0 {
+                        break;
+                    }
+                    stats.suspensions += u64::from(suspended);
+                }
+            }
+        }
+        Ok(stats)
+    }
+}
