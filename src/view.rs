@@ -61,6 +61,10 @@ pub struct View {
     pub camera: Camera,
     /// The area light whose soft shadows are traced.
     pub light: QuadLight,
+    /// Height of a ground plane to add under a scene that has none (scanned
+    /// models): a square, facing +y, four times the scene's extent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ground_y: Option<f32>,
 }
 
 fn default_up() -> Vec3 {
@@ -97,6 +101,34 @@ impl QuadLight {
 }
 
 impl View {
+    /// A view for a scene that comes without one: the scene's own camera if
+    /// it has one, else a camera looking at the bounds' centre from above one
+    /// corner; and a square light a tenth of the diagonal wide, a quarter of
+    /// the diagonal above the top of the bounds, bright enough that a surface
+    /// facing it at the bounds' centre gets an irradiance of about 1.
+    pub fn default_for(bounds: &crate::scene::Bounds, camera: Option<Camera>) -> View {
+        let centre = (bounds.min + bounds.max) * 0.5;
+        let diag = bounds.diagonal().max(1e-6);
+        let camera = camera.unwrap_or(Camera {
+            eye: centre + Vec3::new(0.8, 0.6, 0.9) * diag,
+            target: centre,
+            up: Vec3::Y,
+            fov_y_degrees: 45.0,
+        });
+        let size = 0.1 * diag;
+        let light_centre = Vec3::new(centre.x, bounds.max.y + 0.25 * diag, centre.z);
+        let height = light_centre.y - centre.y;
+        let mut light =
+            QuadLight::from_center(light_centre, Vec3::new(size, 0.0, 0.0), Vec3::new(0.0, 0.0, size));
+        // E ≈ L·A/h² for a small light straight above: L = h²/A gives E ≈ 1.
+        light.intensity = height * height / (size * size);
+        View {
+            camera,
+            light,
+            ground_y: None,
+        }
+    }
+
     /// Parses a view from JSON text; `path` is only used in error messages.
     pub fn from_json(text: &str, path: &Path) -> Result<View> {
         let view: View = serde_json::from_str(text).map_err(|e| Error::view(path, e.to_string()))?;
@@ -126,7 +158,8 @@ impl View {
             .iter()
             .all(|v| v.is_finite())
             && c.fov_y_degrees.is_finite()
-            && l.intensity.is_finite();
+            && l.intensity.is_finite()
+            && self.ground_y.is_none_or(f32::is_finite);
         if !finite {
             return Err("view has a non-finite number (NaN or infinity)".into());
         }

@@ -272,7 +272,14 @@ fn playground() -> (GlbScene, View) {
         objects,
         camera: Some(glb_camera(&camera)),
     };
-    (scene, View { camera, light })
+    (
+        scene,
+        View {
+            camera,
+            light,
+            ground_y: None,
+        },
+    )
 }
 
 /// Two layers of `count` parallel bars each (along x below, along z above),
@@ -343,7 +350,14 @@ fn lattice() -> (GlbScene, View) {
         objects,
         camera: Some(glb_camera(&camera)),
     };
-    (scene, View { camera, light })
+    (
+        scene,
+        View {
+            camera,
+            light,
+            ground_y: None,
+        },
+    )
 }
 
 #[cfg(test)]

@@ -1,6 +1,7 @@
 //! Command-line interface definitions and dispatch.
 
 mod info;
+mod render;
 mod scene_arg;
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -19,6 +20,8 @@ pub struct Cli {
 enum Command {
     /// Load a scene, build its BVH and print statistics.
     Info(info::InfoArgs),
+    /// Render a scene's soft shadows to PNG or EXR on the GPU and print timings.
+    Render(render::RenderArgs),
 }
 
 /// BVH build options shared by the commands that build one.
@@ -61,5 +64,6 @@ impl BvhArgs {
 pub fn run(cli: Cli) -> penumbra::Result<()> {
     match cli.command {
         Command::Info(args) => info::run(&args),
+        Command::Render(args) => render::run(&args),
     }
 }

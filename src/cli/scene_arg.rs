@@ -20,6 +20,15 @@ pub fn load_scene(arg: Option<&Path>) -> Result<Scene> {
     }
 }
 
+/// The view of the built-in scene the argument selects, if it selects one.
+pub fn builtin_view(arg: Option<&Path>) -> Option<penumbra::view::View> {
+    match arg {
+        None => Some(assets::default_scene().view()),
+        Some(p) if !p.exists() => p.to_str().and_then(assets::embedded_scene).map(|s| s.view()),
+        Some(_) => None,
+    }
+}
+
 /// Names of the built-in scenes, for help text.
 pub fn builtin_names() -> String {
     assets::EMBEDDED_SCENES

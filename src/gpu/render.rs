@@ -136,6 +136,18 @@ impl Renderer {
         view: &View,
         settings: &FrameSettings,
     ) -> Result<Frame> {
+        self.render_with_progress(ctx, scene, view, settings, &mut |_, _| {})
+    }
+
+    /// [`Renderer::render`], calling `progress(tiles done, tiles)` as the shadow pass advances.
+    pub fn render_with_progress(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        view: &View,
+        settings: &FrameSettings,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<Frame> {
         let (w, h) = (settings.width, settings.height);
         if w == 0 || h == 0 {
             return Err(Error::Gpu(format!(
@@ -202,6 +214,7 @@ impl Renderer {
             &masks,
             &shadow_params(&view.light, w, h),
             Some(&mut timer),
+            progress,
         )?;
 
         let mut encoder = ctx.device.create_command_encoder(&Default::default());

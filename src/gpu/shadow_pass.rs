@@ -132,6 +132,7 @@ impl ShadowPass {
         masks: &wgpu::Buffer,
         params: &ShadowParams,
         mut timer: Option<&mut GpuTimer>,
+        progress: &mut dyn FnMut(u64, u64),
     ) -> Result<ShadowStats> {
         let tiles_x = params.width.div_ceil(4);
         let tiles_y = params.height.div_ceil(4);
@@ -163,6 +164,8 @@ impl ShadowPass {
             ],
         );
         let mut stats = ShadowStats::default();
+        let total_tiles = u64::from(tiles_x) * u64::from(tiles_y);
+        let mut tiles_done = 0u64;
         for ty0 in (0..tiles_y).step_by(CHUNK_TILES as usize) {
             for tx0 in (0..tiles_x).step_by(CHUNK_TILES as usize) {
                 let mut p = *params;
@@ -199,6 +202,8 @@ impl ShadowPass {
                     }
                     stats.suspensions += u64::from(suspended);
                 }
+                tiles_done += u64::from(tiles);
+                progress(tiles_done, total_tiles);
             }
         }
         Ok(stats)

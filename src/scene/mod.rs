@@ -194,6 +194,39 @@ impl Scene {
         gltf_import::import(bytes, path).map_err(|message| Error::scene(path, message))
     }
 
+    /// Adds a ground plane at height `y`: a square facing +y, centred under the
+    /// scene and four times its larger horizontal extent, with a default material.
+    pub fn add_ground_plane(&mut self, y: f32) {
+        let b = self.bounds();
+        let centre = (b.min + b.max) * 0.5;
+        let half = 2.0 * (b.max.x - b.min.x).max(b.max.z - b.min.z).max(1e-3);
+        let p = |dx: f32, dz: f32| Vec3::new(centre.x + dx * half, y, centre.z + dz * half);
+        let material = self.materials.len() as u32;
+        self.materials.push(Material {
+            name: Some("ground".into()),
+            base_color_factor: [0.8, 0.8, 0.8, 1.0],
+            ..Material::default()
+        });
+        let instance = self.instances.len() as u32;
+        self.instances.push(Instance {
+            node: u32::MAX,
+            name: Some("ground".into()),
+            world_from_object: glam::Mat4::IDENTITY,
+        });
+        for positions in [
+            [p(-1.0, -1.0), p(-1.0, 1.0), p(1.0, 1.0)],
+            [p(-1.0, -1.0), p(1.0, 1.0), p(1.0, -1.0)],
+        ] {
+            self.triangles.push(SceneTriangle {
+                positions,
+                normals: [Vec3::Y; 3],
+                uvs: [Vec2::ZERO; 3],
+                material,
+                instance,
+            });
+        }
+    }
+
     /// Bounds of all triangles.
     pub fn bounds(&self) -> Bounds {
         let mut b = Bounds::EMPTY;

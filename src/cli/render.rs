@@ -1,0 +1,226 @@
+//! `penumbra render`: a soft-shadowed image of a scene, PNG or EXR.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use penumbra::Result;
+use penumbra::bvh::Bvh;
+use penumbra::filter::FilterParams;
+use penumbra::gpu::{FrameSettings, GpuContext, GpuOptions, GpuScene, Renderer, VectorVariant};
+use penumbra::output::{FloatImage, HdrImage, ToneMap, write_float_image, write_image};
+use penumbra::reference::shadow::MASK_SKY;
+use penumbra::view::View;
+
+use super::BvhArgs;
+use super::scene_arg::{builtin_names, builtin_view, load_scene};
+
+/// `--vector` values.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum VectorArg {
+    /// Subgroups when the adapter has fixed 16k-wide ones, else workgroups.
+    Auto,
+    /// 16 lanes of a subgroup (needs fixed subgroups of 16, 32 or 64).
+    Subgroup,
+    /// A 16-invocation workgroup exchanging through workgroup memory (works everywhere).
+    Workgroup,
+}
+
+/// `--aov` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum AovArg {
+    /// Also write the unfiltered and the filtered visibility as float images.
+    Visibility,
+}
+
+/// Arguments of `penumbra render`.
+#[derive(Debug, clap::Args)]
+pub struct RenderArgs {
+    /// glTF (.gltf/.glb) file, or a built-in scene name; default: the built-in default scene.
+    #[arg(value_name = "SCENE", long_help = format!(
+        "glTF 2.0 file (.gltf or .glb), or the name of a built-in scene ({}). \
+         Without it, the built-in default scene.", builtin_names()))]
+    scene: Option<PathBuf>,
+    /// View file (camera + quad light, JSON; see README). Default: the built-in scene's
+    /// view, else the file's camera and a light above the scene.
+    #[arg(long)]
+    view: Option<PathBuf>,
+    /// Image size WIDTHxHEIGHT in pixels (any size; edge tiles are partial).
+    #[arg(long, default_value = "512x512", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Shadow rays per pixel (multi-frusta tracing uses 16: one interleaved set per pixel).
+    #[arg(long, default_value_t = 16)]
+    spp: u32,
+    /// Skip the 4x4 discontinuity filter.
+    #[arg(long)]
+    no_filter: bool,
+    /// Filter: neighbours whose depth differs by more than this fraction of the pixel's are ignored.
+    #[arg(long, default_value_t = FilterParams::DEFAULT_DEPTH_TOLERANCE)]
+    depth_tolerance: f32,
+    /// Filter: neighbours whose normal has a smaller dot product with the pixel's are ignored.
+    #[arg(long, default_value_t = FilterParams::DEFAULT_NORMAL_TOLERANCE)]
+    normal_tolerance: f32,
+    /// Output image; .png (8-bit sRGB, tone-mapped) or .exr (32-bit float linear RGB).
+    #[arg(long, short, default_value = "penumbra.png")]
+    output: PathBuf,
+    /// Extra images: `visibility` writes NAME.visibility.exr and NAME.visibility-filtered.exr.
+    #[arg(long, value_enum)]
+    aov: Option<AovArg>,
+    /// Exposure of the PNG tone map `1 - exp(-exposure * radiance)`.
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f32,
+    /// How the shadow kernel's 16-wide vector is built.
+    #[arg(long, value_enum, default_value_t = VectorArg::Auto)]
+    vector: VectorArg,
+    /// GPU adapter: an index or part of its name (else PENUMBRA_ADAPTER, else automatic).
+    #[arg(long)]
+    adapter: Option<String>,
+    #[command(flatten)]
+    bvh: BvhArgs,
+}
+
+fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or("expected WIDTHxHEIGHT, e.g. 512x512")?;
+    let parse = |v: &str| v.trim().parse::<u32>().map_err(|e| format!("'{v}': {e}"));
+    let (w, h) = (parse(w)?, parse(h)?);
+    if w == 0 || h == 0 {
+        return Err("width and height must be at least 1".into());
+    }
+    Ok((w, h))
+}
+
+/// `out.png` + `visibility` → `out.visibility.exr`.
+fn aov_path(output: &Path, name: &str) -> PathBuf {
+    let stem = output
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    output.with_file_name(format!("{stem}.{name}.exr"))
+}
+
+/// Renders and writes the image(s), printing what ran and how long it took.
+pub fn run(args: &RenderArgs) -> Result<()> {
+    if args.spp != 16 {
+        return Err(penumbra::Error::Gpu(format!(
+            "--spp {}: the multi-frusta tracer traces exactly 16 rays per pixel",
+            args.spp
+        )));
+    }
+    let ext = args
+        .output
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if !matches!(ext.as_deref(), Some("png" | "exr")) {
+        return Err(penumbra::Error::Output {
+            path: args.output.clone(),
+            message: "unsupported output format: use .png or .exr".into(),
+        });
+    }
+    let (width, height) = args.size;
+    let mut scene = load_scene(args.scene.as_deref())?;
+    let view = match (&args.view, builtin_view(args.scene.as_deref())) {
+        (Some(path), _) => View::load(path)?,
+        (None, Some(view)) => view,
+        (None, None) => View::default_for(&scene.bounds(), scene.camera),
+    };
+    if let Some(y) = view.ground_y {
+        scene.add_ground_plane(y);
+    }
+    for w in scene.warnings.messages() {
+        eprintln!("warning: {}: {w}", scene.source.display());
+    }
+    let bvh = Bvh::build(&scene, &args.bvh.settings())?;
+    println!(
+        "scene     {} — {} triangles, BVH {} nodes in {:.1} ms",
+        scene.source.display(),
+        scene.triangles.len(),
+        bvh.nodes.len(),
+        bvh.build_time.as_secs_f64() * 1e3
+    );
+
+    let ctx = GpuContext::new(&GpuOptions {
+        adapter: args.adapter.clone(),
+    })?;
+    println!("adapter   {}", ctx.info);
+    let forced = match args.vector {
+        VectorArg::Auto => None,
+        VectorArg::Subgroup => Some(VectorVariant::Subgroup),
+        VectorArg::Workgroup => Some(VectorVariant::Workgroup),
+    };
+    let renderer = Renderer::new(&ctx, forced)?;
+    println!("vector    {}", renderer.variant());
+    let gpu_scene = GpuScene::new(&ctx, &scene, &bvh)?;
+    let mut settings = FrameSettings::new(width, height);
+    if args.no_filter {
+        settings.filter = None;
+    } else {
+        settings.filter = Some((args.depth_tolerance, args.normal_tolerance));
+    }
+    // Lavapipe compiles a pipeline at its first dispatch: a tiny frame first
+    // keeps compilation out of the timings below.
+    eprint!("compiling kernels…\r");
+    renderer.render(&ctx, &gpu_scene, &view, &FrameSettings::new(8, 8))?;
+    let start = Instant::now();
+    let frame = renderer.render_with_progress(&ctx, &gpu_scene, &view, &settings, &mut |done, total| {
+        eprint!("\rshadow    {done}/{total} tiles of 4x4   ");
+    })?;
+    eprint!("\r{:60}\r", "");
+    let wall = start.elapsed().as_secs_f64();
+
+    let hits = frame.masks.iter().filter(|&&m| m & MASK_SKY == 0).count() as f64;
+    for (pass, ms) in [
+        ("primary", frame.pass_ms("primary")),
+        ("shadow", frame.pass_ms("shadow")),
+        ("shade", frame.pass_ms("shade")),
+        ("filter", frame.pass_ms("filter")),
+    ] {
+        println!("{pass:<9} {ms:>9.2} ms GPU");
+    }
+    let shadow_ms = frame.pass_ms("shadow");
+    println!(
+        "rays      {:.2} M shadow rays ({} px with geometry x 16), {:.2} Mrays/s in the shadow pass",
+        hits * 16.0 / 1e6,
+        hits,
+        if shadow_ms > 0.0 {
+            hits * 16.0 / (shadow_ms * 1e3)
+        } else {
+            f64::NAN
+        }
+    );
+    println!(
+        "frame     {wall:.2} s wall (with readback); {} shadow dispatches, {} tile suspensions",
+        frame.shadow_stats.dispatches, frame.shadow_stats.suspensions
+    );
+
+    let image = HdrImage {
+        width,
+        height,
+        pixels: frame.filtered.iter().map(|v| [v[0], v[1], v[2]]).collect(),
+    };
+    write_image(
+        &args.output,
+        &image,
+        &ToneMap {
+            exposure: args.exposure,
+        },
+    )?;
+    println!("wrote     {}", args.output.display());
+    if args.aov == Some(AovArg::Visibility) {
+        for (name, values) in [
+            ("visibility", &frame.unfiltered),
+            ("visibility-filtered", &frame.filtered),
+        ] {
+            let path = aov_path(&args.output, name);
+            let image = FloatImage {
+                width,
+                height,
+                pixels: values.iter().map(|v| v[3]).collect(),
+            };
+            write_float_image(&path, &image)?;
+            println!("wrote     {}", path.display());
+        }
+    }
+    Ok(())
+}
