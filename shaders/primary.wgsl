@@ -5,8 +5,9 @@
 #import shared/frame
 #import shared/intersect
 
+// Pushes both children of a node: the stack holds at most depth + 1 entries.
 const STACK_SIZE: u32 = 64u;
-// Below lavapipe's 65,535 loop iterations per invocation.
+// Below lavapipe's 65,535 loop iterations per invocation (all loops counted).
 const ITERATION_LIMIT: u32 = 60000u;
 
 @group(0) @binding(0) var<uniform> camera: CameraParams;
@@ -17,6 +18,21 @@ const ITERATION_LIMIT: u32 = 60000u;
 @group(0) @binding(5) var<storage, read_write> gbuffer: array<GBufferTexel>;
 // [0]: pixels whose ray ran out of iterations (the host reports an error).
 @group(0) @binding(6) var<storage, read_write> status: array<atomic<u32>>;
+@group(0) @binding(7) var<storage, read> textures: array<GpuTexture>;
+@group(0) @binding(8) var<storage, read> texels: array<vec4<f32>>;
+
+// Base colour factor times the nearest texel (coordinates wrap); twin of ShadingData::albedo.
+fn albedo(material: GpuMaterial, uv: vec2<f32>) -> vec3<f32> {
+    if material.texture >= arrayLength(&textures) {
+        return material.base_color;
+    }
+    let t = textures[material.texture];
+    let u = uv.x - floor(uv.x);
+    let v = uv.y - floor(uv.y);
+    let x = min(u32(u * f32(t.width)), t.width - 1u);
+    let y = min(u32(v * f32(t.height)), t.height - 1u);
+    return material.base_color * texels[t.offset + y * t.width + x].xyz;
+}
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -34,30 +50,40 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var t_best = 3.4028234663852886e38;
     var stack: array<u32, 64>;
     var depth = 0u;
+    var cursor = 0u;  // next triangle of the current leaf
+    var end = 0u;     // end of the current leaf's triangles
     if intersect_box(origin, inv_dir, nodes[0], t_best) >= 0.0 {
         stack[0] = 0u;
         depth = 1u;
     }
+    // One loop, one step per iteration (a leaf triangle or a node): lavapipe
+    // counts iterations of every loop an iteration reaches, nested ones too,
+    // so a nested leaf loop would let its limit strike before ours.
     var iterations = 0u;
-    while depth > 0u {
+    loop {
+        if cursor >= end && depth == 0u {
+            break;
+        }
         iterations += 1u;
         if iterations > ITERATION_LIMIT {
             atomicAdd(&status[0], 1u);
             break;
         }
+        if cursor < end {
+            let h = intersect_triangle(triangles[cursor], origin, dir, t_best);
+            if h.x >= 0.0 {
+                t_best = h.x;
+                best = h;
+                best_tri = cursor;
+            }
+            cursor += 1u;
+            continue;
+        }
         depth -= 1u;
         let node = nodes[stack[depth]];
         if node.count > 0u {
-            // The leaf's triangles, one loop iteration each.
-            for (var i = node.first; i < node.first + node.count; i++) {
-                iterations += 1u;
-                let h = intersect_triangle(triangles[i], origin, dir, t_best);
-                if h.x >= 0.0 {
-                    t_best = h.x;
-                    best = h;
-                    best_tri = i;
-                }
-            }
+            cursor = node.first;
+            end = node.first + node.count;
             continue;
         }
         let l = node.first;
@@ -97,12 +123,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             normal = -normal;
         }
         let point = origin + dir * best.x;
+        let uv = sh.uv0 * w + sh.uv1 * best.y + sh.uv2 * best.z;
         texel.origin = point + geo * camera.ray_offset;
         texel.depth = best.x * length(dir);
         texel.normal = normal;
         texel.triangle = best_tri;
         texel.geo_normal = geo;
-        texel.albedo = materials[sh.material].base_color;
+        texel.albedo = albedo(materials[sh.material], uv);
     }
     gbuffer[gid.y * camera.width + gid.x] = texel;
 }

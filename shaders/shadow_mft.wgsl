@@ -9,13 +9,22 @@ const STACK_SIZE: u32 = 64u;
 const MASK_FULL: u32 = 0xffffu;
 const MASK_SKY: u32 = 0x10000u;
 // Suspended-state slot of a tile: status, node, mask, cursor, end, alive,
-// stack depth, popping, 16 lane masks, 64 stack nodes, 64 stack masks.
+// stack depth, popping, 16 lane masks, 64 stack nodes, 64 stack masks,
+// the candidate frusta of a transposed leaf (`cand`), 7 words unused.
 const STATE_WORDS: u32 = 160u;
 const ST_STATUS: u32 = 0u;
 const ST_LANES: u32 = 8u;
 const ST_STACK_NODE: u32 = 24u;
 const ST_STACK_MASK: u32 = 88u;
+const ST_CAND: u32 = 152u;
 const STATUS_SUSPENDED: u32 = 1u;
+
+// How a leaf triangle spends the 16 lanes (LeafMode in src/gpu/shadow_pass.rs).
+// false, per lane: lane j culls the triangle against its own frustum and tests
+// its 16 rays itself. true, transposed (the paper's): lane j only culls; then
+// for each frustum f that is left, lane i tests ray i of f and a ballot gives
+// f's 16 bits. Both modes compute every bit with the same arithmetic.
+override LEAF_TRANSPOSED: bool = false;
 
 @group(0) @binding(0) var<uniform> params: ShadowParams;
 @group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
@@ -37,6 +46,10 @@ var<private> f_occluded: u32;
 // The vector's traversal stack (the same in every lane).
 var<private> stack_node: array<u32, 64>;
 var<private> stack_mask: array<u32, 64>;
+
+// Transposed leaves: every lane's ray origin, 16 per vector of the workgroup,
+// so that any lane can build the rays of any frustum of its vector.
+var<workgroup> wg_origins: array<vec3<f32>, VEC16_WG_SIZE>;
 
 fn corner(k: u32) -> vec3<f32> {
     return params.light_corners[k].xyz;
@@ -91,18 +104,40 @@ fn edge_culls(m: vec3<f32>, d: f32, k0: vec3<f32>, k1: vec3<f32>, k2: vec3<f32>,
     return select(all(s > vec4<f32>(0.0)), all(s < vec4<f32>(0.0)), d > 0.0);
 }
 
-fn ray_bit(j: u32, m0: vec3<f32>, m1: vec3<f32>, m2: vec3<f32>, d: f32, limit: f32) -> u32 {
-    let dir = f_dirs[j];
-    let s0 = dot(m0, dir);
-    let s1 = dot(m1, dir);
-    let s2 = dot(m2, dir);
-    let inside = select(s0 <= 0.0 && s1 <= 0.0 && s2 <= 0.0, s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0, d > 0.0);
-    return select(0u, 1u << j, inside && limit < params.t_max * abs(s0 + s1 + s2));
+// A triangle's edge planes through a ray origin `o`: normals m0, m1, m2 of
+// the planes through `o` and each edge, and d = det(a0, a1, a2) (a_k = v_k - o).
+struct Wedge {
+    m0: vec3<f32>,
+    m1: vec3<f32>,
+    m2: vec3<f32>,
+    d: f32,
 }
 
-// Culls the triangle against this lane's frustum, else tests its 16 rays;
-// the arithmetic of reference::mft::frustum_test_triangle, in the same order.
-fn test_triangle(tri: BvhTriangle) -> u32 {
+fn triangle_wedge(tri: BvhTriangle, o: vec3<f32>) -> Wedge {
+    let a0 = tri.v0 - o;
+    let a1 = (tri.v0 + tri.e1) - o;
+    let a2 = (tri.v0 + tri.e2) - o;
+    let m0 = cross(a0, a1);
+    return Wedge(m0, cross(a1, a2), cross(a2, a0), dot(m0, a2));
+}
+
+// Whether the ray from the wedge's origin along `dir` hits the triangle before
+// t_max: inside all three edge planes, and the hit distance |d| / |m·dir| (the
+// sum of the three dots is the dot with the triangle's normal) below t_max.
+fn wedge_hit(w: Wedge, dir: vec3<f32>) -> bool {
+    let s0 = dot(w.m0, dir);
+    let s1 = dot(w.m1, dir);
+    let s2 = dot(w.m2, dir);
+    let inside = select(s0 <= 0.0 && s1 <= 0.0 && s2 <= 0.0, s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0, w.d > 0.0);
+    return inside && abs(w.d) < params.t_max * abs(s0 + s1 + s2);
+}
+
+fn ray_bit(j: u32, w: Wedge) -> u32 {
+    return select(0u, 1u << j, wedge_hit(w, f_dirs[j]));
+}
+
+// The triangle lies wholly outside one of this lane's six frustum planes.
+fn planes_cull(tri: BvhTriangle) -> bool {
     let o = f_origin;
     let v0 = tri.v0;
     let v1 = tri.v0 + tri.e1;
@@ -111,56 +146,84 @@ fn test_triangle(tri: BvhTriangle) -> u32 {
     let a1 = v1 - o;
     let a2 = v2 - o;
     let c0 = corner(0u);
-    if all_outside(f_side[0], a0, a1, a2) || all_outside(f_side[1], a0, a1, a2)
+    return all_outside(f_side[0], a0, a1, a2) || all_outside(f_side[1], a0, a1, a2)
         || all_outside(f_side[2], a0, a1, a2) || all_outside(f_side[3], a0, a1, a2)
         || all_outside(f_geo, a0, a1, a2)
-        || all_outside(params.light_normal, v0 - c0, v1 - c0, v2 - c0) {
-        return 0u;
+        || all_outside(params.light_normal, v0 - c0, v1 - c0, v2 - c0);
+}
+
+// Seen from this lane's origin the triangle is edge-on (d == 0), or the whole
+// light lies outside one of its edge planes (corner-ray test): no ray can hit.
+fn wedge_culls(w: Wedge) -> bool {
+    if w.d == 0.0 {
+        return true;
     }
-    let m0 = cross(a0, a1);
-    let m1 = cross(a1, a2);
-    let m2 = cross(a2, a0);
-    let d = dot(m0, a2);
-    if d == 0.0 {
-        return 0u;
-    }
-    let k0 = c0 - o;
+    let o = f_origin;
+    let k0 = corner(0u) - o;
     let k1 = corner(1u) - o;
     let k2 = corner(2u) - o;
     let k3 = corner(3u) - o;
-    if edge_culls(m0, d, k0, k1, k2, k3) || edge_culls(m1, d, k0, k1, k2, k3) || edge_culls(m2, d, k0, k1, k2, k3) {
+    return edge_culls(w.m0, w.d, k0, k1, k2, k3) || edge_culls(w.m1, w.d, k0, k1, k2, k3)
+        || edge_culls(w.m2, w.d, k0, k1, k2, k3);
+}
+
+// No ray of this lane's frustum can hit the triangle (the culling half of test_triangle).
+fn frustum_culls_triangle(tri: BvhTriangle) -> bool {
+    return planes_cull(tri) || wedge_culls(triangle_wedge(tri, f_origin));
+}
+
+// Per-lane leaves: culls the triangle against this lane's frustum, else tests
+// its 16 rays; the arithmetic of reference::mft::frustum_test_triangle, in the same order.
+fn test_triangle(tri: BvhTriangle) -> u32 {
+    if planes_cull(tri) {
         return 0u;
     }
-    let limit = abs(d);
+    let w = triangle_wedge(tri, f_origin);
+    if wedge_culls(w) {
+        return 0u;
+    }
     // Unrolled on purpose: every loop iteration counts towards lavapipe's limit.
-    return ray_bit(0u, m0, m1, m2, d, limit) | ray_bit(1u, m0, m1, m2, d, limit)
-        | ray_bit(2u, m0, m1, m2, d, limit) | ray_bit(3u, m0, m1, m2, d, limit)
-        | ray_bit(4u, m0, m1, m2, d, limit) | ray_bit(5u, m0, m1, m2, d, limit)
-        | ray_bit(6u, m0, m1, m2, d, limit) | ray_bit(7u, m0, m1, m2, d, limit)
-        | ray_bit(8u, m0, m1, m2, d, limit) | ray_bit(9u, m0, m1, m2, d, limit)
-        | ray_bit(10u, m0, m1, m2, d, limit) | ray_bit(11u, m0, m1, m2, d, limit)
-        | ray_bit(12u, m0, m1, m2, d, limit) | ray_bit(13u, m0, m1, m2, d, limit)
-        | ray_bit(14u, m0, m1, m2, d, limit) | ray_bit(15u, m0, m1, m2, d, limit);
+    return ray_bit(0u, w) | ray_bit(1u, w) | ray_bit(2u, w) | ray_bit(3u, w)
+        | ray_bit(4u, w) | ray_bit(5u, w) | ray_bit(6u, w) | ray_bit(7u, w)
+        | ray_bit(8u, w) | ray_bit(9u, w) | ray_bit(10u, w) | ray_bit(11u, w)
+        | ray_bit(12u, w) | ray_bit(13u, w) | ray_bit(14u, w) | ray_bit(15u, w);
+}
+
+// Transposed leaves: whether ray g_lane of frustum f (a lane of this vector)
+// hits the triangle. Same origin, direction and arithmetic as lane f's own
+// test_triangle, so the ballot of this is bit for bit lane f's ray mask.
+fn transposed_ray_hits(tri: BvhTriangle, f: u32) -> bool {
+    let o = wg_origins[g_vector_in_wg * 16u + f];
+    let w = triangle_wedge(tri, o);
+    return wedge_hit(w, light_points[f * 16u + g_lane].xyz - o);
 }
 
 @compute @workgroup_size(VEC16_WG_SIZE)
 fn main(ids: Vec16Ids) {
     vec16_init(ids);
     let slot = g_vector;
-    if slot >= params.tiles_x * params.tiles_y {
-        return;  // past the last tile of the dispatch (uniform: per vector)
-    }
     let tx = params.tile_origin_x + slot % params.tiles_x;
     let ty = params.tile_origin_y + slot / params.tiles_x;
     let x = tx * 4u + (g_lane & 3u);
     let y = ty * 4u + (g_lane >> 2u);
     let inside = x < params.width && y < params.height;
     let pixel = y * params.width + x;
+    let texel = gbuffer[min(pixel, arrayLength(&gbuffer) - 1u)];
+    if LEAF_TRANSPOSED {
+        // Before any return: with several vectors per workgroup, every
+        // invocation must reach the barrier, including those of a vector past
+        // the last tile or with nothing to resume.
+        wg_origins[g_vector_in_wg * 16u + g_lane] = texel.origin;
+        workgroupBarrier();
+    }
     let base = slot * STATE_WORDS;
+    if slot >= params.tiles_x * params.tiles_y {
+        return;  // past the last tile of the dispatch (uniform: per vector)
+    }
     if params.resume != 0u && uniform16(state[base + ST_STATUS]) != STATUS_SUSPENDED {
         return;
     }
-    setup_frustum(gbuffer[min(pixel, arrayLength(&gbuffer) - 1u)], g_lane, inside);
+    setup_frustum(texel, g_lane, inside);
 
     // The traversal state; every lane holds the same values.
     var node = 0u;      // inner node to visit next (when not in a leaf)
@@ -170,6 +233,8 @@ fn main(ids: Vec16Ids) {
     var alive = 0u;     // frusta not yet done
     var depth = 0u;     // stack depth
     var popping = 0u;   // 1: the next step pops the stack
+    var cand = 0u;      // transposed leaves: frusta still to test against triangle cursor - 1
+    var cand_tri: BvhTriangle;  // that triangle, loaded once for all its candidates
     var running = true;
     if params.resume != 0u {
         node = uniform16(state[base + 1u]);
@@ -179,6 +244,10 @@ fn main(ids: Vec16Ids) {
         alive = uniform16(state[base + 5u]);
         depth = uniform16(state[base + 6u]);
         popping = uniform16(state[base + 7u]);
+        cand = uniform16(state[base + ST_CAND]);
+        if cand != 0u {
+            cand_tri = triangles[cursor - 1u];
+        }
         f_occluded = state[base + ST_LANES + g_lane];
         for (var i = 0u; i < depth; i++) {
             stack_node[i] = uniform16(state[base + ST_STACK_NODE + i]);
@@ -196,44 +265,37 @@ fn main(ids: Vec16Ids) {
     }
 
     // One step per iteration: one triangle of a leaf, one stack pop, or one
-    // inner node; steps are counted so no loop runs into lavapipe's limit.
+    // inner node; with transposed leaves, the inner loop after it tests the
+    // triangle's candidate frusta. Every pass of either loop is counted, as
+    // lavapipe counts it towards its limit: a loop nested in another costs it
+    // a pass each time the outer body runs, even when no lane enters it. So
+    // nothing else loops in here (the state is saved after the loop).
     var iterations = 0u;
+    var suspended = false;
     loop {
         if !running {
             break;
         }
-        if iterations == params.iteration_budget {
-            // Out of budget: save the state; the next dispatch resumes this tile.
-            state[base + ST_LANES + g_lane] = f_occluded;
-            if g_lane == 0u {
-                state[base + ST_STATUS] = STATUS_SUSPENDED;
-                state[base + 1u] = node;
-                state[base + 2u] = mask;
-                state[base + 3u] = cursor;
-                state[base + 4u] = end;
-                state[base + 5u] = alive;
-                state[base + 6u] = depth;
-                state[base + 7u] = popping;
-                for (var i = 0u; i < depth; i++) {
-                    state[base + ST_STACK_NODE + i] = stack_node[i];
-                    state[base + ST_STACK_MASK + i] = stack_mask[i];
-                }
-                atomicAdd(&status[0], 1u);
-            }
-            return;
+        if iterations >= params.iteration_budget {
+            suspended = true;
+            break;
         }
         iterations += 1u;
         var enter = false;
-        if cursor < end {
-            let tri = triangles[cursor];
-            cursor += 1u;
-            if (mask & (1u << g_lane)) != 0u && !is_done() {
-                f_occluded |= test_triangle(tri);
-            }
-            if cursor == end {
-                alive = ballot16(!is_done());
-                running = alive != 0u;
-                popping = 1u;
+        var in_leaf = false;
+        if cand != 0u || cursor < end {
+            in_leaf = true;
+            // With cand != 0 a resumed tile goes on with the candidates of triangle cursor - 1.
+            if cand == 0u {
+                let tri = triangles[cursor];
+                cursor += 1u;
+                let mine = (mask & (1u << g_lane)) != 0u && !is_done();
+                if LEAF_TRANSPOSED {
+                    cand_tri = tri;
+                    cand = ballot16(mine && !frustum_culls_triangle(tri));
+                } else if mine {
+                    f_occluded |= test_triangle(tri);
+                }
             }
         } else if popping != 0u {
             if depth == 0u {
@@ -275,6 +337,29 @@ fn main(ids: Vec16Ids) {
                 popping = 1u;
             }
         }
+        if LEAF_TRANSPOSED {
+            // The candidate frusta, lowest first: frustum f meets the triangle
+            // with all 16 lanes, one ray each. An inner loop rather than a step
+            // each, because lavapipe runs the whole body above (every branch,
+            // masked) at every step. `cand` and `f` come from ballots: uniform.
+            loop {
+                iterations += 1u;
+                if cand == 0u || iterations >= params.iteration_budget {
+                    break;  // out of budget: the rest wait in `cand`
+                }
+                let f = firstTrailingBit(cand);
+                cand &= cand - 1u;
+                let bits = ballot16(transposed_ray_hits(cand_tri, f));
+                if g_lane == f {
+                    f_occluded |= bits;
+                }
+            }
+        }
+        if in_leaf && cand == 0u && cursor == end {
+            alive = ballot16(!is_done());
+            running = alive != 0u;
+            popping = 1u;
+        }
         if enter {
             let c = nodes[node];
             if c.count > 0u {
@@ -282,6 +367,27 @@ fn main(ids: Vec16Ids) {
                 end = c.first + c.count;
             }
         }
+    }
+    if suspended {
+        // Out of budget: save the state; the next dispatch resumes this tile.
+        state[base + ST_LANES + g_lane] = f_occluded;
+        if g_lane == 0u {
+            state[base + ST_STATUS] = STATUS_SUSPENDED;
+            state[base + 1u] = node;
+            state[base + 2u] = mask;
+            state[base + 3u] = cursor;
+            state[base + 4u] = end;
+            state[base + 5u] = alive;
+            state[base + 6u] = depth;
+            state[base + 7u] = popping;
+            state[base + ST_CAND] = cand;
+            for (var i = 0u; i < depth; i++) {
+                state[base + ST_STACK_NODE + i] = stack_node[i];
+                state[base + ST_STACK_MASK + i] = stack_mask[i];
+            }
+            atomicAdd(&status[0], 1u);
+        }
+        return;
     }
     if inside {
         masks[pixel] = f_occluded;

@@ -1,12 +1,13 @@
 //! CPU-side preparation of what the frame's passes read: the camera, the
-//! shading data in leaf order and the materials.
+//! shading data in leaf order, the materials and their textures.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3, Vec4};
 
 use crate::bvh::Bvh;
-use crate::layout::{CameraParams, GpuMaterial, ShadingTriangle};
-use crate::scene::Scene;
+use crate::layout::{CameraParams, GpuMaterial, GpuTexture, ShadingTriangle};
+use crate::scene::{ImageSource, Scene};
 use crate::view::Camera;
+use crate::{Error, Result};
 
 /// Shadow-ray origins leave the surface by this fraction of the scene's
 /// diagonal: large enough to clear f32 rounding of the hit point, small
@@ -53,6 +54,10 @@ pub fn shading_triangles(scene: &Scene, bvh: &Bvh) -> Vec<ShadingTriangle> {
                 pad1: 0,
                 n2: s.normals[2],
                 pad2: 0,
+                uv0: s.uvs[0],
+                uv1: s.uvs[1],
+                uv2: s.uvs[2],
+                pad3: [0; 2],
             }
         })
         .collect()
@@ -69,7 +74,141 @@ pub fn gpu_materials(scene: &Scene) -> Vec<GpuMaterial> {
                 m.base_color_factor[1],
                 m.base_color_factor[2],
             ),
-            pad: 0,
+            texture: m.base_color_texture.unwrap_or(u32::MAX),
         })
         .collect()
+}
+
+/// Everything the primary pass needs besides the BVH: per-triangle shading
+/// data, materials, and the base colour textures decoded to linear RGBA.
+#[derive(Clone, Debug)]
+pub struct ShadingData {
+    /// Shading data in leaf order.
+    pub triangles: Vec<ShadingTriangle>,
+    /// Materials.
+    pub materials: Vec<GpuMaterial>,
+    /// One entry per scene image: where its texels are.
+    pub textures: Vec<GpuTexture>,
+    /// All textures' texels, linear RGBA.
+    pub texels: Vec<Vec4>,
+}
+
+impl ShadingData {
+    /// Gathers and decodes; an image that cannot be read or decoded is an error naming it.
+    pub fn new(scene: &Scene, bvh: &Bvh) -> Result<ShadingData> {
+        let mut textures = Vec::with_capacity(scene.images.len());
+        let mut texels = Vec::new();
+        for (i, source) in scene.images.iter().enumerate() {
+            let (bytes, what) = match source {
+                ImageSource::File(path) => (
+                    std::fs::read(path).map_err(|e| {
+                        Error::scene(&scene.source, format!("image {i} '{}': {e}", path.display()))
+                    })?,
+                    path.display().to_string(),
+                ),
+                ImageSource::Embedded { bytes, .. } => (bytes.clone(), format!("embedded image {i}")),
+            };
+            let image = image::load_from_memory(&bytes)
+                .map_err(|e| Error::scene(&scene.source, format!("{what}: cannot decode: {e}")))?
+                .to_rgba8();
+            textures.push(GpuTexture {
+                offset: texels.len() as u32,
+                width: image.width(),
+                height: image.height(),
+                pad: 0,
+            });
+            // Base colour textures are sRGB-encoded (glTF 2.0 §3.9.2); shading wants linear.
+            texels.extend(image.pixels().map(|p| {
+                Vec4::new(
+                    srgb_to_linear(p[0]),
+                    srgb_to_linear(p[1]),
+                    srgb_to_linear(p[2]),
+                    p[3] as f32 / 255.0,
+                )
+            }));
+        }
+        if texels.is_empty() {
+            // A bindable buffer needs at least one element.
+            texels.push(Vec4::ONE);
+        }
+        Ok(ShadingData {
+            triangles: shading_triangles(scene, bvh),
+            materials: gpu_materials(scene),
+            textures,
+            texels,
+        })
+    }
+
+    /// Albedo of `material` at texture coordinate `uv`: the base colour factor
+    /// times the nearest texel (coordinates wrap), as the primary kernel computes it.
+    pub fn albedo(&self, material: u32, uv: Vec2) -> Vec3 {
+        let m = &self.materials[material as usize];
+        match self.textures.get(m.texture as usize) {
+            None => m.base_color,
+            Some(t) => {
+                let u = uv.x - uv.x.floor();
+                let v = uv.y - uv.y.floor();
+                let x = ((u * t.width as f32) as u32).min(t.width - 1);
+                let y = ((v * t.height as f32) as u32).min(t.height - 1);
+                m.base_color * self.texels[(t.offset + y * t.width + x) as usize].truncate()
+            }
+        }
+    }
+}
+
+fn srgb_to_linear(c: u8) -> f32 {
+    let c = c as f32 / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn albedo_is_factor_times_nearest_texel_with_wrapping() {
+        let data = ShadingData {
+            triangles: Vec::new(),
+            materials: vec![
+                GpuMaterial {
+                    base_color: Vec3::new(0.5, 1.0, 1.0),
+                    texture: 0,
+                },
+                GpuMaterial {
+                    base_color: Vec3::splat(0.25),
+                    texture: u32::MAX,
+                },
+            ],
+            textures: vec![GpuTexture {
+                offset: 0,
+                width: 2,
+                height: 2,
+                pad: 0,
+            }],
+            texels: vec![
+                Vec4::splat(1.0),
+                Vec4::splat(2.0),
+                Vec4::splat(3.0),
+                Vec4::splat(4.0),
+            ],
+        };
+        assert_eq!(data.albedo(0, Vec2::new(0.25, 0.25)), Vec3::new(0.5, 1.0, 1.0));
+        assert_eq!(data.albedo(0, Vec2::new(0.75, 0.25)), Vec3::new(1.0, 2.0, 2.0));
+        assert_eq!(data.albedo(0, Vec2::new(0.25, 0.75)), Vec3::new(1.5, 3.0, 3.0));
+        assert_eq!(
+            data.albedo(0, Vec2::new(-0.25, 1.75)),
+            Vec3::new(2.0, 4.0, 4.0),
+            "wraps"
+        );
+        assert_eq!(
+            data.albedo(1, Vec2::new(0.5, 0.5)),
+            Vec3::splat(0.25),
+            "no texture"
+        );
+        assert!((srgb_to_linear(255) - 1.0).abs() < 1e-6 && srgb_to_linear(0) == 0.0);
+    }
 }

@@ -108,7 +108,7 @@ pub struct ShadowParams {
 }
 
 /// Shading data of one triangle, in the same (leaf) order as
-/// [`BvhTriangle`], 48 bytes (WGSL `ShadingTriangle`): kept apart so traversal
+/// [`BvhTriangle`], 80 bytes (WGSL `ShadingTriangle`): kept apart so traversal
 /// never loads it.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -125,6 +125,14 @@ pub struct ShadingTriangle {
     pub n2: Vec3,
     /// Unused (bytes 44..48).
     pub pad2: u32,
+    /// TEXCOORD_0 at corner 0 (bytes 48..56).
+    pub uv0: glam::Vec2,
+    /// TEXCOORD_0 at corner 1 (bytes 56..64).
+    pub uv1: glam::Vec2,
+    /// TEXCOORD_0 at corner 2 (bytes 64..72).
+    pub uv2: glam::Vec2,
+    /// Unused (bytes 72..80).
+    pub pad3: [u32; 2],
 }
 
 /// One material as the primary pass reads it, 16 bytes (WGSL `GpuMaterial`).
@@ -133,6 +141,21 @@ pub struct ShadingTriangle {
 pub struct GpuMaterial {
     /// Linear RGB base colour factor (bytes 0..12).
     pub base_color: Vec3,
+    /// Index of the base colour texture in the texture table, `u32::MAX` for none (bytes 12..16).
+    pub texture: u32,
+}
+
+/// Where one texture's texels are in the texel buffer, 16 bytes (WGSL `GpuTexture`).
+/// Texels are linear RGBA `vec4<f32>`s, row-major, row 0 at the top (v = 0).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTexture {
+    /// Index of the first texel (bytes 0..4).
+    pub offset: u32,
+    /// Width in texels (bytes 4..8).
+    pub width: u32,
+    /// Height in texels (bytes 8..12).
+    pub height: u32,
     /// Unused (bytes 12..16).
     pub pad: u32,
 }
@@ -182,7 +205,8 @@ pub struct ShadeParams {
 }
 
 const _: () = assert!(size_of::<ShadeParams>() == 48);
-const _: () = assert!(size_of::<ShadingTriangle>() == 48);
+const _: () = assert!(size_of::<ShadingTriangle>() == 80);
+const _: () = assert!(size_of::<GpuTexture>() == 16);
 const _: () = assert!(size_of::<GpuMaterial>() == 16);
 const _: () = assert!(size_of::<CameraParams>() == 64);
 const _: () = assert!(size_of::<BvhNode>() == 32);
@@ -340,14 +364,29 @@ mod tests {
                 n1,
                 pad1,
                 n2,
-                pad2
+                pad2,
+                uv0,
+                uv1,
+                uv2,
+                pad3
             }),
         );
         check(
             FRAME_WGSL,
             "GpuMaterial",
             size_of::<GpuMaterial>(),
-            fields!(GpuMaterial { base_color, pad }),
+            fields!(GpuMaterial { base_color, texture }),
+        );
+        check(
+            FRAME_WGSL,
+            "GpuTexture",
+            size_of::<GpuTexture>(),
+            fields!(GpuTexture {
+                offset,
+                width,
+                height,
+                pad
+            }),
         );
         check(
             FRAME_WGSL,

@@ -346,6 +346,24 @@ mod tests {
     }
 
     #[test]
+    fn shadow_kernel_has_the_overrides_the_pass_sets() {
+        // ShadowPass sets these by name; a rename would only fail at pipeline creation.
+        for &aliases in KERNELS.iter().find(|(k, _)| *k == "shadow_mft").unwrap().1 {
+            let module = validate(&assemble("shadow_mft", aliases).unwrap()).unwrap();
+            let leaf = module
+                .overrides
+                .iter()
+                .find(|(_, o)| o.name.as_deref() == Some("LEAF_TRANSPOSED"))
+                .map(|(_, o)| &module.types[o.ty].inner);
+            assert_eq!(
+                leaf,
+                Some(&naga::TypeInner::Scalar(naga::Scalar::BOOL)),
+                "shadow_mft with {aliases:?}: `override LEAF_TRANSPOSED: bool`"
+            );
+        }
+    }
+
+    #[test]
     fn every_top_level_shader_is_a_listed_kernel() {
         for &(name, _) in SOURCES {
             if !name.starts_with("shared/") {

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use penumbra::bvh::{Bvh, BvhSettings};
-use penumbra::frame::{RAY_OFFSET_FRACTION, camera_params, gpu_materials, shading_triangles};
+use penumbra::frame::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
 use penumbra::output::{read_float_image, read_hdr_image};
 use penumbra::reference::primary::primary_gbuffer;
 use penumbra::reference::shadow::{MASK_SKY, per_ray_masks, shadow_params, visibility};
@@ -85,12 +85,7 @@ fn generated_scenes_to_png_and_exr_with_visibility_close_to_the_oracle() {
             128,
             scene.bounds().diagonal() * RAY_OFFSET_FRACTION,
         );
-        let gbuffer = primary_gbuffer(
-            &bvh,
-            &shading_triangles(&scene, &bvh),
-            &gpu_materials(&scene),
-            &cam,
-        );
+        let gbuffer = primary_gbuffer(&bvh, &ShadingData::new(&scene, &bvh).unwrap(), &cam);
         let params = shadow_params(&view.light, 128, 128);
         let masks = per_ray_masks(&bvh, &gbuffer, &sampling::light_points(&view.light), &params);
         let hit: Vec<usize> = (0..masks.len()).filter(|&p| masks[p] & MASK_SKY == 0).collect();
@@ -140,4 +135,23 @@ fn bad_render_arguments_fail_with_one_line() {
         );
     }
     assert!(!dir.join("x.jpg").exists());
+}
+
+#[test]
+fn leaf_mode_is_selectable_and_reported() {
+    let dir = out_dir("leaf_mode");
+    for (mode, reported) in [
+        ("per-lane", "(per-lane leaves)"),
+        ("transposed", "(transposed leaves)"),
+    ] {
+        let stdout = penumbra(
+            &dir,
+            &["render", "lattice", "--size", "32x32", "--leaf-mode", mode],
+        );
+        let vector = stdout
+            .lines()
+            .find(|l| l.starts_with("vector"))
+            .unwrap_or_default();
+        assert!(vector.contains(reported), "--leaf-mode {mode}:\n{stdout}");
+    }
 }

@@ -1,6 +1,6 @@
 //! The GPU frame on lavapipe (or any adapter) against the CPU oracles: shadow
-//! masks from both vector variants, the primary pass, the filter, exact
-//! lit/umbra values, and a tile whose work exceeds lavapipe's loop limit.
+//! masks from both vector variants and both leaf modes, the primary pass, the
+//! filter, exact lit/umbra values, and a tile whose work exceeds lavapipe's loop limit.
 
 mod support;
 
@@ -8,8 +8,11 @@ use std::path::Path;
 use std::sync::OnceLock;
 
 use penumbra::bvh::{Bvh, BvhSettings};
-use penumbra::gpu::{FrameSettings, GpuContext, GpuOptions, GpuScene, Renderer, VectorVariant};
-use penumbra::reference::shadow::{per_ray_masks, shadow_params};
+use penumbra::gpu::{
+    FrameSettings, GpuContext, GpuOptions, GpuScene, LeafMode, Renderer, RendererOptions, ShadowPass,
+    VectorVariant, empty_storage_buffer, read_buffer, storage_buffer,
+};
+use penumbra::reference::shadow::{ITERATION_BUDGET, per_ray_masks, shadow_params};
 use penumbra::{assets, sampling, scene::Scene, view::View};
 use support::compare_masks;
 
@@ -89,6 +92,140 @@ fn shadow_masks_match_the_per_ray_oracle_for_every_variant() {
             match &first {
                 None => first = Some(frame.masks.clone()),
                 Some(m) => assert_eq!(m, &frame.masks, "{}: variants differ", s.name),
+            }
+        }
+    }
+}
+
+#[test]
+fn transposed_leaves_give_the_per_lane_masks_bit_for_bit() {
+    let vs = variants();
+    eprintln!("variants tested: {vs:?}");
+    for s in assets::EMBEDDED_SCENES {
+        let (scene, view) = embedded(s.name);
+        let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
+        let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
+        let (w, h) = (90, 70); // not a multiple of 4: edge tiles are partial
+        let mut settings = FrameSettings::new(w, h);
+        settings.keep_gbuffer = true;
+        let corners: Vec<_> = scene.triangles.iter().map(|t| t.positions).collect();
+        let params = shadow_params(&view.light, w, h);
+        let points = sampling::light_points(&view.light);
+        for &variant in &vs {
+            let mut per_lane: Option<Vec<u32>> = None;
+            for leaf_mode in [LeafMode::PerLane, LeafMode::Transposed] {
+                let options = RendererOptions {
+                    variant: Some(variant),
+                    leaf_mode,
+                };
+                let renderer = Renderer::new(ctx(), options).unwrap();
+                assert_eq!((renderer.variant(), renderer.leaf_mode()), (variant, leaf_mode));
+                let frame = renderer.render(ctx(), &gpu_scene, &view, &settings).unwrap();
+                let gbuffer = frame.gbuffer.as_ref().unwrap();
+                let oracle = per_ray_masks(&bvh, gbuffer, &points, &params);
+                let (differing, total, unexplained) = compare_masks(
+                    &oracle,
+                    &frame.masks,
+                    gbuffer,
+                    w,
+                    &points,
+                    &params,
+                    &corners,
+                    1e-4 * scene.bounds().diagonal(),
+                );
+                eprintln!(
+                    "{} {variant} {leaf_mode}: {differing} of {total} rays differ from the oracle; \
+                     shadow {:.1} ms",
+                    s.name,
+                    frame.pass_ms("shadow")
+                );
+                assert!(
+                    unexplained.is_empty(),
+                    "{} {variant} {leaf_mode}: {:?}",
+                    s.name,
+                    &unexplained[..unexplained.len().min(10)]
+                );
+                assert!(
+                    differing * 1000 <= total,
+                    "{} {variant} {leaf_mode}: {differing} of {total}",
+                    s.name
+                );
+                match &per_lane {
+                    None => per_lane = Some(frame.masks.clone()),
+                    Some(m) => {
+                        let bits: u32 = m
+                            .iter()
+                            .zip(&frame.masks)
+                            .map(|(a, b)| (a ^ b).count_ones())
+                            .sum();
+                        assert_eq!(
+                            bits, 0,
+                            "{} {variant}: transposed masks differ in {bits} bits",
+                            s.name
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Suspension in the middle of a transposed leaf (the candidate frusta of a triangle are
+/// loop steps too, saved with the tile) resumes to the same masks as an uninterrupted run.
+#[test]
+fn transposed_leaves_resume_after_suspension_with_the_same_masks() {
+    let (scene, view) = embedded("lattice");
+    let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
+    let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
+    let (w, h) = (46, 38);
+    let mut settings = FrameSettings::new(w, h);
+    settings.keep_gbuffer = true;
+    let frame = Renderer::new(ctx(), None)
+        .unwrap()
+        .render(ctx(), &gpu_scene, &view, &settings)
+        .unwrap();
+    let texels = frame.gbuffer.as_ref().unwrap();
+    let points: Vec<[f32; 4]> = sampling::light_points(&view.light)
+        .iter()
+        .map(|p| p.extend(0.0).to_array())
+        .collect();
+    let usage = wgpu::BufferUsages::empty();
+    let gbuffer = storage_buffer(ctx(), "G-buffer", texels, usage).unwrap();
+    let light_points = storage_buffer(ctx(), "light points", &points, usage).unwrap();
+    let bytes = u64::from(w * h) * 4;
+    let masks = empty_storage_buffer(ctx(), "masks", bytes, wgpu::BufferUsages::COPY_SRC).unwrap();
+    for variant in variants() {
+        for leaf_mode in [LeafMode::PerLane, LeafMode::Transposed] {
+            let pass = ShadowPass::new(ctx(), Some(variant), leaf_mode).unwrap();
+            // An odd budget far below a tile's work: tiles stop at every kind of step.
+            for budget in [ITERATION_BUDGET, 97] {
+                let mut params = shadow_params(&view.light, w, h);
+                params.iteration_budget = budget;
+                let stats = pass
+                    .run(
+                        ctx(),
+                        &gpu_scene,
+                        &gbuffer,
+                        &light_points,
+                        &masks,
+                        &params,
+                        None,
+                        &mut |_, _| {},
+                    )
+                    .unwrap();
+                let got: Vec<u32> = read_buffer(ctx(), &masks, 0..bytes).unwrap();
+                eprintln!("{variant} {leaf_mode} budget {budget}: {stats:?}");
+                if budget < ITERATION_BUDGET {
+                    assert!(stats.suspensions > 0, "{variant} {leaf_mode}: nothing suspended");
+                }
+                assert!(
+                    got == frame.masks,
+                    "{variant} {leaf_mode} budget {budget}: masks differ from the frame's in {} bits",
+                    got.iter()
+                        .zip(&frame.masks)
+                        .map(|(a, b)| (a ^ b).count_ones())
+                        .sum::<u32>()
+                );
             }
         }
     }

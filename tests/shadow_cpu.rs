@@ -7,7 +7,7 @@ mod support;
 use std::path::Path;
 
 use penumbra::bvh::{Bvh, BvhSettings};
-use penumbra::frame::{RAY_OFFSET_FRACTION, camera_params, gpu_materials, shading_triangles};
+use penumbra::frame::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
 use penumbra::reference::mft::mft_masks;
 use penumbra::reference::primary::primary_gbuffer;
 use penumbra::reference::shadow::{ITERATION_BUDGET, per_ray_masks, shadow_params};
@@ -23,12 +23,7 @@ fn mft_twin_matches_per_ray_oracle_on_generated_scenes() {
         let diag = scene.bounds().diagonal();
         let (w, h) = (90, 70); // not a multiple of 4 on purpose: edge tiles are partial
         let cam = camera_params(&view.camera, w, h, diag * RAY_OFFSET_FRACTION);
-        let gbuffer = primary_gbuffer(
-            &bvh,
-            &shading_triangles(&scene, &bvh),
-            &gpu_materials(&scene),
-            &cam,
-        );
+        let gbuffer = primary_gbuffer(&bvh, &ShadingData::new(&scene, &bvh).unwrap(), &cam);
         let params = shadow_params(&view.light, w, h);
         let points = sampling::light_points(&view.light);
         let oracle = per_ray_masks(&bvh, &gbuffer, &points, &params);
@@ -81,12 +76,7 @@ fn suspending_and_resuming_gives_the_same_masks() {
         h,
         scene.bounds().diagonal() * RAY_OFFSET_FRACTION,
     );
-    let gbuffer = primary_gbuffer(
-        &bvh,
-        &shading_triangles(&scene, &bvh),
-        &gpu_materials(&scene),
-        &cam,
-    );
+    let gbuffer = primary_gbuffer(&bvh, &ShadingData::new(&scene, &bvh).unwrap(), &cam);
     let params = shadow_params(&view.light, w, h);
     let points = sampling::light_points(&view.light);
     let (whole, c1) = mft_masks(&bvh, &gbuffer, &points, &params, u32::MAX);

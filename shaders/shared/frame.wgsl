@@ -28,7 +28,7 @@ struct ShadowParams {
     tiles_y: u32,                        // bytes 108..112: tile rows of the dispatch
 }
 
-// Shading data of one triangle (leaf order, like BvhTriangle), 48 bytes.
+// Shading data of one triangle (leaf order, like BvhTriangle), 80 bytes.
 struct ShadingTriangle {
     n0: vec3<f32>,     // bytes 0..12: unit shading normal at corner 0
     material: u32,     // bytes 12..16: index into the materials
@@ -36,12 +36,24 @@ struct ShadingTriangle {
     pad1: u32,         // bytes 28..32
     n2: vec3<f32>,     // bytes 32..44
     pad2: u32,         // bytes 44..48
+    uv0: vec2<f32>,    // bytes 48..56: TEXCOORD_0 at corner 0
+    uv1: vec2<f32>,    // bytes 56..64
+    uv2: vec2<f32>,    // bytes 64..72
+    pad3: array<u32, 2>,  // bytes 72..80
 }
 
 // One material, 16 bytes.
 struct GpuMaterial {
-    base_color: vec3<f32>,  // bytes 0..12: linear RGB
-    pad: u32,               // bytes 12..16
+    base_color: vec3<f32>,  // bytes 0..12: linear RGB factor
+    texture: u32,           // bytes 12..16: base colour texture, 0xffffffff = none
+}
+
+// Where a texture's linear RGBA texels are in the texel buffer, 16 bytes.
+struct GpuTexture {
+    offset: u32,  // bytes 0..4: first texel
+    width: u32,   // bytes 4..8
+    height: u32,  // bytes 8..12
+    pad: u32,     // bytes 12..16
 }
 
 // The pinhole camera, 64 bytes: ray = eye + t * (forward + sx * right + sy * up).

@@ -13,11 +13,13 @@ struct Vec16Ids {
 var<private> g_lane: u32;     // 0..16: this invocation's lane in its vector
 var<private> g_vector: u32;   // index of this vector in the dispatch
 var<private> g_sid: u32;      // lane in the subgroup
+var<private> g_vector_in_wg: u32;  // index of this vector in its workgroup (= subgroup)
 
 fn vec16_init(ids: Vec16Ids) {
     g_sid = ids.subgroup_index;
     g_lane = ids.subgroup_index & 15u;
-    g_vector = ids.workgroup.x * VEC16_PER_WG + (ids.subgroup_index >> 4u);
+    g_vector_in_wg = ids.subgroup_index >> 4u;
+    g_vector = ids.workgroup.x * VEC16_PER_WG + g_vector_in_wg;
 }
 
 fn ballot16(pred: bool) -> u32 {

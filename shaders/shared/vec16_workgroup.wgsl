@@ -1,5 +1,5 @@
 // The 16-wide vector as one 16-invocation workgroup exchanging through workgroup memory.
-// Works on every device; kernels call vec16_init, ballot16 and uniform16 only.
+// Works on every device; kernels use vec16_init, ballot16, uniform16 and the g_* ids below.
 
 // One workgroup is one vector.
 const VEC16_WG_SIZE: u32 = 16u;
@@ -12,6 +12,7 @@ struct Vec16Ids {
 
 var<private> g_lane: u32;    // 0..16: this invocation's lane in its vector
 var<private> g_vector: u32;  // index of this vector in the dispatch
+var<private> g_vector_in_wg: u32;  // index of this vector in its workgroup: always 0 here
 
 var<workgroup> sh_vote: array<u32, 16>;
 var<workgroup> sh_word: u32;
@@ -19,6 +20,7 @@ var<workgroup> sh_word: u32;
 fn vec16_init(ids: Vec16Ids) {
     g_lane = ids.local_index;
     g_vector = ids.workgroup.x;
+    g_vector_in_wg = 0u;
 }
 
 // Bit i set when lane i's `pred` holds. Every lane gets the same value, and

@@ -6,7 +6,9 @@ use std::time::Instant;
 use penumbra::Result;
 use penumbra::bvh::Bvh;
 use penumbra::filter::FilterParams;
-use penumbra::gpu::{FrameSettings, GpuContext, GpuOptions, GpuScene, Renderer, VectorVariant};
+use penumbra::gpu::{
+    FrameSettings, GpuContext, GpuOptions, GpuScene, LeafMode, Renderer, RendererOptions, VectorVariant,
+};
 use penumbra::output::{FloatImage, HdrImage, ToneMap, write_float_image, write_image};
 use penumbra::reference::shadow::MASK_SKY;
 use penumbra::view::View;
@@ -23,6 +25,33 @@ pub enum VectorArg {
     Subgroup,
     /// A 16-invocation workgroup exchanging through workgroup memory (works everywhere).
     Workgroup,
+}
+
+/// `--leaf-mode` values.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum LeafModeArg {
+    /// Each lane tests its own frustum's 16 rays against a leaf triangle.
+    PerLane,
+    /// The paper's form: per surviving frustum, the 16 lanes test its 16 rays.
+    Transposed,
+}
+
+impl From<LeafMode> for LeafModeArg {
+    fn from(mode: LeafMode) -> LeafModeArg {
+        match mode {
+            LeafMode::PerLane => LeafModeArg::PerLane,
+            LeafMode::Transposed => LeafModeArg::Transposed,
+        }
+    }
+}
+
+impl From<LeafModeArg> for LeafMode {
+    fn from(arg: LeafModeArg) -> LeafMode {
+        match arg {
+            LeafModeArg::PerLane => LeafMode::PerLane,
+            LeafModeArg::Transposed => LeafMode::Transposed,
+        }
+    }
 }
 
 /// `--aov` values.
@@ -71,6 +100,9 @@ pub struct RenderArgs {
     /// How the shadow kernel's 16-wide vector is built.
     #[arg(long, value_enum, default_value_t = VectorArg::Auto)]
     vector: VectorArg,
+    /// How the shadow kernel spends its 16 lanes on a leaf triangle (same image either way).
+    #[arg(long, value_enum, default_value_t = LeafMode::default().into())]
+    leaf_mode: LeafModeArg,
     /// GPU adapter: an index or part of its name (else PENUMBRA_ADAPTER, else automatic).
     #[arg(long)]
     adapter: Option<String>,
@@ -149,8 +181,18 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         VectorArg::Subgroup => Some(VectorVariant::Subgroup),
         VectorArg::Workgroup => Some(VectorVariant::Workgroup),
     };
-    let renderer = Renderer::new(&ctx, forced)?;
-    println!("vector    {}", renderer.variant());
+    let renderer = Renderer::new(
+        &ctx,
+        RendererOptions {
+            variant: forced,
+            leaf_mode: args.leaf_mode.into(),
+        },
+    )?;
+    println!(
+        "vector    {} ({} leaves)",
+        renderer.variant(),
+        renderer.leaf_mode()
+    );
     let gpu_scene = GpuScene::new(&ctx, &scene, &bvh)?;
     let mut settings = FrameSettings::new(width, height);
     if args.no_filter {

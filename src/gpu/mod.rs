@@ -16,7 +16,7 @@ mod timer;
 
 pub use buffers::{empty_storage_buffer, read_buffer, storage_buffer};
 pub use context::{ADAPTER_ENV, AdapterSummary, GpuContext, GpuOptions};
-pub use render::{Frame, FrameSettings, Renderer};
+pub use render::{Frame, FrameSettings, Renderer, RendererOptions};
 pub use scene_buffers::{GpuScene, validate_for_gpu};
-pub use shadow_pass::{ShadowPass, ShadowStats, VectorVariant};
+pub use shadow_pass::{LeafMode, ShadowPass, ShadowStats, VectorVariant};
 pub use timer::GpuTimer;

@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use super::kernel::{Binding, Checks, Kernel, uniform_buffer};
-use super::shadow_pass::{ShadowPass, ShadowStats, VectorVariant};
+use super::shadow_pass::{LeafMode, ShadowPass, ShadowStats, VectorVariant};
 use super::{GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer, storage_buffer};
 use crate::filter::FilterParams;
 use crate::frame::{RAY_OFFSET_FRACTION, camera_params};
@@ -78,6 +78,26 @@ impl Frame {
     }
 }
 
+/// How the renderer builds its shadow pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RendererOptions {
+    /// Force a vector variant, or `None` for the adapter's best (see [`VectorVariant::choose`]).
+    pub variant: Option<VectorVariant>,
+    /// How the shadow kernel's leaves use the lanes.
+    pub leaf_mode: LeafMode,
+}
+
+/// A forced (or automatic) vector variant with the default leaf mode, so that
+/// `Renderer::new(ctx, None)` and `Renderer::new(ctx, Some(variant))` read as before.
+impl From<Option<VectorVariant>> for RendererOptions {
+    fn from(variant: Option<VectorVariant>) -> RendererOptions {
+        RendererOptions {
+            variant,
+            leaf_mode: LeafMode::default(),
+        }
+    }
+}
+
 /// The pipelines of the standalone frame.
 #[derive(Debug)]
 pub struct Renderer {
@@ -88,8 +108,10 @@ pub struct Renderer {
 }
 
 impl Renderer {
-    /// Builds every pipeline; `variant` forces a vector variant of the shadow pass.
-    pub fn new(ctx: &GpuContext, variant: Option<VectorVariant>) -> Result<Renderer> {
+    /// Builds every pipeline; `options` (or just an `Option<VectorVariant>`) choose the
+    /// shadow pass's vector variant and leaf mode.
+    pub fn new(ctx: &GpuContext, options: impl Into<RendererOptions>) -> Result<Renderer> {
+        let options = options.into();
         use Binding::*;
         Ok(Renderer {
             // Indices: BVH ranges validated by GpuScene::new, the stack index is clamped.
@@ -98,12 +120,12 @@ impl Renderer {
                 "primary",
                 &[],
                 &[
-                    Uniform, ReadOnly, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadWrite,
+                    Uniform, ReadOnly, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadWrite, ReadOnly, ReadOnly,
                 ],
                 &[],
                 Checks::Unchecked,
             )?,
-            shadow: ShadowPass::new(ctx, variant)?,
+            shadow: ShadowPass::new(ctx, options.variant, options.leaf_mode)?,
             shade: Kernel::new(
                 ctx,
                 "shade",
@@ -126,6 +148,11 @@ impl Renderer {
     /// The shadow pass's vector variant.
     pub fn variant(&self) -> VectorVariant {
         self.shadow.variant
+    }
+
+    /// The shadow pass's leaf mode.
+    pub fn leaf_mode(&self) -> LeafMode {
+        self.shadow.leaf_mode
     }
 
     /// Renders one frame of `scene` seen through `view`.
@@ -188,6 +215,8 @@ impl Renderer {
                     &scene.materials,
                     &gbuffer,
                     &status,
+                    &scene.textures,
+                    &scene.texels,
                 ],
             );
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {

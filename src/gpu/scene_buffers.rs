@@ -2,7 +2,7 @@
 
 use super::{GpuContext, storage_buffer};
 use crate::bvh::Bvh;
-use crate::frame::{gpu_materials, shading_triangles};
+use crate::frame::ShadingData;
 use crate::reference::mft::STACK_SIZE;
 use crate::scene::Scene;
 use crate::{Error, Result};
@@ -18,6 +18,10 @@ pub struct GpuScene {
     pub shading: wgpu::Buffer,
     /// `array<GpuMaterial>`.
     pub materials: wgpu::Buffer,
+    /// `array<GpuTexture>` (at least one element; a material's index past the end means none).
+    pub textures: wgpu::Buffer,
+    /// `array<vec4<f32>>`: linear RGBA texels of all textures.
+    pub texels: wgpu::Buffer,
     /// Length of the scene's bounding-box diagonal (for relative offsets).
     pub diagonal: f32,
 }
@@ -54,11 +58,14 @@ impl GpuScene {
     pub fn new(ctx: &GpuContext, scene: &Scene, bvh: &Bvh) -> Result<GpuScene> {
         validate_for_gpu(bvh)?;
         let usage = wgpu::BufferUsages::COPY_DST;
+        let shading = ShadingData::new(scene, bvh)?;
         Ok(GpuScene {
             nodes: storage_buffer(ctx, "BVH nodes", &bvh.nodes, usage)?,
             triangles: storage_buffer(ctx, "BVH triangles", &bvh.triangles, usage)?,
-            shading: storage_buffer(ctx, "shading triangles", &shading_triangles(scene, bvh), usage)?,
-            materials: storage_buffer(ctx, "materials", &gpu_materials(scene), usage)?,
+            shading: storage_buffer(ctx, "shading triangles", &shading.triangles, usage)?,
+            materials: storage_buffer(ctx, "materials", &shading.materials, usage)?,
+            textures: storage_buffer(ctx, "textures", &shading.textures, usage)?,
+            texels: storage_buffer(ctx, "texels", &shading.texels, usage)?,
             diagonal: scene.bounds().diagonal(),
         })
     }

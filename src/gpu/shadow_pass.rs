@@ -73,6 +73,47 @@ impl VectorVariant {
     }
 }
 
+/// How the kernel spends the vector's 16 lanes on a leaf triangle (DESIGN.md, "MFT in
+/// WGSL"). Both give the same masks bit for bit; only the speed differs.
+///
+/// `PerLane` is the default because it is the faster one on lavapipe, by 1.2–2.2×.
+/// Shadow pass, GPU ms, min / median of 3 runs (Mrays/s at the median), 256×256,
+/// `penumbra render`, Mesa 22.3.6 lavapipe on 2 AVX-512 cores:
+///
+/// | scene, vector                          | per-lane          | transposed        |
+/// |----------------------------------------|-------------------|-------------------|
+/// | Sponza atrium (1.01 M rays), subgroup  | 378 / 415 (2.44)  | 898 / 903 (1.12)  |
+/// | lattice (0.67 M rays), subgroup        | 205 / 205 (3.25)  | 247 / 252 (2.64)  |
+/// | Sponza atrium, workgroup               | 3053 / 3442 (0.29)| 6783 / 6976 (0.15)|
+/// | lattice, workgroup                     | 1163 / 1187 (0.56)| 1798 / 1829 (0.36)|
+///
+/// (subgroup: `LP_NATIVE_VECTOR_WIDTH=512`, 16-wide subgroups; workgroup: the default
+/// 8-wide build.) Lavapipe loads memory one lane at a time, so the transposed form
+/// pays two gathers (an origin, a light point) per surviving frustum where the per-lane
+/// form reuses directions held in registers; and its ballots cost barriers in the
+/// workgroup vector. On a GPU, whose loads and ballots are cheap, the balance may differ.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum LeafMode {
+    /// Lane `j` culls the triangle against its own frustum and, if it survives, tests the
+    /// frustum's 16 rays itself (unrolled): no cross-lane traffic, one loop step per triangle.
+    #[default]
+    PerLane,
+    /// The paper's form: lane `j` only culls; then for each frustum `f` that survives (a
+    /// ballot, bit-scanned lowest first, in an inner loop whose every pass counts towards
+    /// the iteration budget) lane `i` tests ray `i` of `f`, from `f`'s origin in workgroup
+    /// memory, and a ballot of the hits is OR-ed into `f`'s mask.
+    Transposed,
+}
+
+impl std::fmt::Display for LeafMode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            LeafMode::PerLane => "per-lane",
+            LeafMode::Transposed => "transposed",
+        })
+    }
+}
+
 /// What a shadow pass did besides writing masks.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ShadowStats {
@@ -82,23 +123,27 @@ pub struct ShadowStats {
     pub suspensions: u64,
 }
 
-/// The shadow pass's pipeline for one vector variant.
+/// The shadow pass's pipeline for one vector variant and leaf mode.
 #[derive(Debug)]
 pub struct ShadowPass {
     kernel: Kernel,
     /// The vector variant this pass runs.
     pub variant: VectorVariant,
+    /// How its leaves use the lanes.
+    pub leaf_mode: LeafMode,
     vectors_per_workgroup: u32,
 }
 
 impl ShadowPass {
-    /// Builds the pipeline; `variant` as in [`VectorVariant::choose`].
-    pub fn new(ctx: &GpuContext, variant: Option<VectorVariant>) -> Result<ShadowPass> {
+    /// Builds the pipeline; `variant` as in [`VectorVariant::choose`], `leaf_mode` sets the
+    /// kernel's `LEAF_TRANSPOSED` override.
+    pub fn new(ctx: &GpuContext, variant: Option<VectorVariant>, leaf_mode: LeafMode) -> Result<ShadowPass> {
         let (variant, vectors_per_workgroup) = VectorVariant::choose(&ctx.info, variant)?;
-        let constants: Vec<(&str, f64)> = match variant {
-            VectorVariant::Subgroup => vec![("VEC16_PER_WG", f64::from(vectors_per_workgroup))],
-            VectorVariant::Workgroup => vec![],
-        };
+        let transposed = f64::from(u8::from(leaf_mode == LeafMode::Transposed));
+        let mut constants: Vec<(&str, f64)> = vec![("LEAF_TRANSPOSED", transposed)];
+        if variant == VectorVariant::Subgroup {
+            constants.push(("VEC16_PER_WG", f64::from(vectors_per_workgroup)));
+        }
         use Binding::*;
         let kernel = Kernel::new(
             ctx,
@@ -109,12 +154,15 @@ impl ShadowPass {
             ],
             &constants,
             // Indices: BVH ranges validated by GpuScene::new, stack indices clamped,
-            // pixel and state slots bounded by the parameters the host sets here.
+            // pixel and state slots bounded by the parameters the host sets here; the
+            // transposed leaves index the 256 light points and the workgroup's origins
+            // with lane numbers (< 16) and the vector's index in its workgroup.
             Checks::Unchecked,
         )?;
         Ok(ShadowPass {
             kernel,
             variant,
+            leaf_mode,
             vectors_per_workgroup,
         })
     }

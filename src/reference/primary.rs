@@ -2,8 +2,8 @@
 //! camera ray per pixel, written as a G-buffer texel.
 
 use crate::bvh::Bvh;
-use crate::frame::camera_ray;
-use crate::layout::{CameraParams, GBufferTexel, GpuMaterial, ShadingTriangle};
+use crate::frame::{ShadingData, camera_ray};
+use crate::layout::{CameraParams, GBufferTexel};
 use crate::reference::closest_hit;
 
 /// The G-buffer texel of pixel `(x, y)`.
@@ -11,14 +11,7 @@ use crate::reference::closest_hit;
 /// Normals are flipped to the side the camera ray comes from (a back face
 /// seen by the camera is lit like a front face); the shadow-ray origin is
 /// the hit point moved `ray_offset` along the flipped geometric normal.
-pub fn primary_texel(
-    bvh: &Bvh,
-    shading: &[ShadingTriangle],
-    materials: &[GpuMaterial],
-    cam: &CameraParams,
-    x: u32,
-    y: u32,
-) -> GBufferTexel {
+pub fn primary_texel(bvh: &Bvh, shading: &ShadingData, cam: &CameraParams, x: u32, y: u32) -> GBufferTexel {
     let dir = camera_ray(cam, x, y);
     let Some(hit) = closest_hit(bvh, cam.eye, dir, f32::INFINITY) else {
         return GBufferTexel {
@@ -27,7 +20,7 @@ pub fn primary_texel(
         };
     };
     let tri = &bvh.triangles[hit.triangle as usize];
-    let sh = &shading[hit.triangle as usize];
+    let sh = &shading.triangles[hit.triangle as usize];
     let mut geo = tri.e1.cross(tri.e2).normalize();
     let w = 1.0 - hit.u - hit.v;
     let mut normal = (sh.n0 * w + sh.n1 * hit.u + sh.n2 * hit.v).normalize_or(geo);
@@ -38,6 +31,7 @@ pub fn primary_texel(
         normal = -normal;
     }
     let point = cam.eye + dir * hit.t;
+    let uv = sh.uv0 * w + sh.uv1 * hit.u + sh.uv2 * hit.v;
     GBufferTexel {
         origin: point + geo * cam.ray_offset,
         depth: hit.t * dir.length(),
@@ -45,18 +39,13 @@ pub fn primary_texel(
         triangle: hit.triangle,
         geo_normal: geo,
         pad0: 0,
-        albedo: materials[sh.material as usize].base_color,
+        albedo: shading.albedo(sh.material, uv),
         pad1: 0,
     }
 }
 
 /// The whole G-buffer (row-major, row 0 at the top), rows spread over all cores.
-pub fn primary_gbuffer(
-    bvh: &Bvh,
-    shading: &[ShadingTriangle],
-    materials: &[GpuMaterial],
-    cam: &CameraParams,
-) -> Vec<GBufferTexel> {
+pub fn primary_gbuffer(bvh: &Bvh, shading: &ShadingData, cam: &CameraParams) -> Vec<GBufferTexel> {
     let (w, h) = (cam.width as usize, cam.height as usize);
     let mut out = vec![GBufferTexel::default(); w * h];
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
@@ -66,7 +55,7 @@ pub fn primary_gbuffer(
             s.spawn(move || {
                 for (i, t) in chunk.iter_mut().enumerate() {
                     let p = c * rows_per * w + i;
-                    *t = primary_texel(bvh, shading, materials, cam, (p % w) as u32, (p / w) as u32);
+                    *t = primary_texel(bvh, shading, cam, (p % w) as u32, (p / w) as u32);
                 }
             });
         }
