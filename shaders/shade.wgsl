@@ -1,4 +1,4 @@
-// Shading: diffuse BRDF toward the light centre times the visible fraction from the shadow masks.
+// Shading: irradiance from the light centre times the visible fraction (filtered next), and albedo / pi.
 // Dispatched by the renderer before the filter; CPU twin: src/reference/shade.rs.
 
 #import shared/frame
@@ -13,6 +13,8 @@ const MASK_SKY: u32 = 0x10000u;
 @group(0) @binding(3) var<storage, read_write> values: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read_write> depth: array<f32>;
 @group(0) @binding(5) var<storage, read_write> normal: array<vec4<f32>>;
+// Diffuse BRDF albedo / pi (rgb); radiance = brdf * filtered irradiance.
+@group(0) @binding(6) var<storage, read_write> brdf: array<vec4<f32>>;
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -24,6 +26,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let mask = masks[p];
     depth[p] = texel.depth;
     normal[p] = vec4<f32>(texel.normal, 0.0);
+    brdf[p] = vec4<f32>(texel.albedo / PI, 0.0);
     if (mask & MASK_SKY) != 0u {
         values[p] = vec4<f32>(0.0, 0.0, 0.0, 1.0);
         return;
@@ -35,5 +38,5 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let cos_surface = max(dot(texel.normal, w) / r, 0.0);
     let cos_light = max(-dot(params.light_normal, w) / r, 0.0);
     let irradiance = params.radiance * (params.light_area * cos_surface * cos_light / r2);
-    values[p] = vec4<f32>(texel.albedo / PI * irradiance * visibility, visibility);
+    values[p] = vec4<f32>(irradiance * visibility, visibility);
 }

@@ -801,3 +801,39 @@ fn cli_free_sizes() {
     }
     eprintln!("cli_free_sizes: {:.1} s", start.elapsed().as_secs_f64());
 }
+
+#[test]
+fn shade_matches_cpu_twin() {
+    use penumbra::reference::shade::{shade_params, shade_pixel};
+    let (w, h) = (64, 48);
+    let renderer = Renderer::new(ctx(), None).unwrap();
+    for s in assets::EMBEDDED_SCENES {
+        let (scene, view) = embedded(s.name);
+        let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
+        let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
+        let mut settings = FrameSettings::new(w, h);
+        settings.keep_gbuffer = true;
+        let (frame, _) = render(&renderer, &gpu_scene, &view, &settings);
+        let gbuffer = frame.gbuffer.as_ref().unwrap();
+        let params = shade_params(&view.light, w, h);
+        let mut worst = 0f32;
+        for (p, texel) in gbuffer.iter().enumerate() {
+            let cpu = shade_pixel(&params, texel, frame.masks[p]).to_array();
+            for (c, gpu) in cpu.iter().zip(&frame.unfiltered[p]) {
+                // sqrt and division may round differently on the GPU: a relative tolerance of 1e-5.
+                worst = worst.max((c - gpu).abs() / c.abs().max(1.0));
+            }
+            let brdf = texel.albedo / std::f32::consts::PI;
+            assert!((Vec3::from_slice(&frame.brdf[p][..3]) - brdf).abs().max_element() <= 1e-6);
+        }
+        eprintln!("{}: shade GPU vs CPU worst relative error {worst:.2e}", s.name);
+        assert!(worst <= 1e-5, "{}: {worst}", s.name);
+        let radiance = frame.radiance();
+        assert_eq!(radiance.len(), (w * h) as usize);
+        assert!(
+            radiance.iter().any(|r| r[0] > 0.0),
+            "{}: the image is not black",
+            s.name
+        );
+    }
+}

@@ -239,7 +239,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let image = HdrImage {
         width,
         height,
-        pixels: frame.filtered.iter().map(|v| [v[0], v[1], v[2]]).collect(),
+        pixels: frame.radiance(),
     };
     write_image(
         &args.output,

@@ -55,10 +55,12 @@ pub struct Frame {
     pub height: u32,
     /// Shadow masks: bit j = ray j blocked; `1 << 16` marks sky pixels.
     pub masks: Vec<u32>,
-    /// Shaded radiance (rgb) and visibility (a) before the filter.
+    /// Shadowed irradiance (rgb) and visibility (a) before the filter.
     pub unfiltered: Vec<[f32; 4]>,
     /// The same after the filter (equal to `unfiltered` when the filter is off).
     pub filtered: Vec<[f32; 4]>,
+    /// Diffuse BRDF, albedo / π (rgb; a unused); 0 for sky pixels.
+    pub brdf: Vec<[f32; 4]>,
     /// The G-buffer, when [`FrameSettings::keep_gbuffer`] asked for it.
     pub gbuffer: Option<Vec<GBufferTexel>>,
     /// GPU milliseconds per pass: `primary`, `shadow` (all its dispatches), `shade`, `filter`.
@@ -68,6 +70,15 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// Outgoing radiance per pixel: BRDF × filtered irradiance (the image).
+    pub fn radiance(&self) -> Vec<[f32; 3]> {
+        self.brdf
+            .iter()
+            .zip(&self.filtered)
+            .map(|(b, e)| [b[0] * e[0], b[1] * e[1], b[2] * e[2]])
+            .collect()
+    }
+
     /// GPU milliseconds of the pass `name`, summed over its dispatches (0 when not timed).
     pub fn pass_ms(&self, name: &str) -> f64 {
         self.timings
@@ -130,7 +141,9 @@ impl Renderer {
                 ctx,
                 "shade",
                 &[],
-                &[Uniform, ReadOnly, ReadOnly, ReadWrite, ReadWrite, ReadWrite],
+                &[
+                    Uniform, ReadOnly, ReadOnly, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
+                ],
                 &[],
                 Checks::Checked,
             )?,
@@ -189,6 +202,7 @@ impl Renderer {
         let depth = empty_storage_buffer(ctx, "depth", pixels * 4, rw)?;
         let normal = empty_storage_buffer(ctx, "normals", pixels * 16, rw)?;
         let filtered = empty_storage_buffer(ctx, "filtered values", pixels * 16, rw)?;
+        let brdf = empty_storage_buffer(ctx, "brdf", pixels * 16, rw)?;
         let status = empty_storage_buffer(ctx, "primary status", 16, rw | wgpu::BufferUsages::COPY_DST)?;
         let points: Vec<[f32; 4]> = sampling::light_points(&view.light)
             .iter()
@@ -248,9 +262,10 @@ impl Renderer {
 
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         {
-            let bind = self
-                .shade
-                .bind(ctx, &[&shade_buf, &gbuffer, &masks, &values, &depth, &normal]);
+            let bind = self.shade.bind(
+                ctx,
+                &[&shade_buf, &gbuffer, &masks, &values, &depth, &normal, &brdf],
+            );
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("shade"),
                 timestamp_writes: timer.pass_writes("shade"),
@@ -297,6 +312,7 @@ impl Renderer {
             None
         };
         Ok(Frame {
+            brdf: read_buffer(ctx, &brdf, 0..pixels * 16)?,
             width: w,
             height: h,
             masks: read_buffer(ctx, &masks, 0..pixels * 4)?,

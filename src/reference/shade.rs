@@ -1,6 +1,7 @@
-//! CPU twin of the shade pass (`shaders/shade.wgsl`): diffuse BRDF toward the
-//! light centre times the visible fraction (the paper's separation of
-//! shading and visibility).
+//! CPU twin of the shade pass (`shaders/shade.wgsl`): the light's irradiance
+//! toward its centre times the visible fraction (the paper's separation of
+//! shading and visibility). The filter smooths this irradiance; the diffuse
+//! BRDF (albedo / π) multiplies it afterwards, so textures stay sharp.
 
 use glam::{Vec3, Vec4};
 
@@ -21,9 +22,9 @@ pub fn shade_params(light: &QuadLight, width: u32, height: u32) -> ShadeParams {
     }
 }
 
-/// `(radiance rgb, visibility)` of one pixel: the light treated as a point at
-/// its centre with its area and cosine falloff for the unshadowed term, times
-/// the mask's visible fraction. Sky pixels: black with visibility 1.
+/// `(irradiance rgb, visibility)` of one pixel: the light treated as a point
+/// at its centre with its area and cosine falloff for the unshadowed term,
+/// times the mask's visible fraction. Sky pixels: black with visibility 1.
 pub fn shade_pixel(params: &ShadeParams, texel: &GBufferTexel, mask: u32) -> Vec4 {
     if mask & MASK_SKY != 0 {
         return Vec4::new(0.0, 0.0, 0.0, 1.0);
@@ -35,6 +36,6 @@ pub fn shade_pixel(params: &ShadeParams, texel: &GBufferTexel, mask: u32) -> Vec
     let cos_surface = (texel.normal.dot(w) / r).max(0.0);
     let cos_light = (-params.light_normal.dot(w) / r).max(0.0);
     let irradiance = params.radiance * (params.light_area * cos_surface * cos_light / r2);
-    let radiance: Vec3 = texel.albedo / std::f32::consts::PI * irradiance * v;
-    radiance.extend(v)
+    let shadowed: Vec3 = irradiance * v;
+    shadowed.extend(v)
 }
