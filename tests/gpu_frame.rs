@@ -8,18 +8,14 @@
 
 mod support;
 
-use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
+use std::path::PathBuf;
 use std::time::Instant;
 
 use glam::{Vec2, Vec3};
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::filter::{FilterParams, discontinuity_filter};
 use penumbra::frame::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
-use penumbra::gpu::{
-    Frame, FrameSettings, GpuContext, GpuOptions, GpuScene, LeafMode, Renderer, RendererOptions,
-    VectorVariant,
-};
+use penumbra::gpu::{Frame, FrameSettings, GpuScene, LeafMode, Renderer, RendererOptions};
 use penumbra::layout::{GBufferTexel, ShadowParams};
 use penumbra::reference::mft::{Counters, Frustum, mft_masks, trace_tile};
 use penumbra::reference::primary::primary_gbuffer;
@@ -27,6 +23,7 @@ use penumbra::reference::shadow::{ITERATION_BUDGET, MASK_FULL, MASK_SKY, per_ray
 use penumbra::scene::{Instance, LoadWarnings, Material, Scene, SceneTriangle};
 use penumbra::view::{Camera, QuadLight, View};
 use penumbra::{assets, sampling};
+use support::gpu::{ctx, embedded, variants};
 use support::{Rng, compare_masks};
 
 /// lavapipe (Mesa 22.3) ends every loop of an invocation after this many
@@ -34,34 +31,6 @@ use support::{Rng, compare_masks};
 /// another costs one more iteration each time the outer body reaches it, even
 /// in a branch no lane takes, so a loop with a nested loop gets only ~32,767.
 const LAVAPIPE_LOOP_LIMIT: u64 = 65_535;
-
-/// One context per test binary; a missing adapter fails every test with the reason.
-fn ctx() -> &'static GpuContext {
-    static CTX: OnceLock<GpuContext> = OnceLock::new();
-    CTX.get_or_init(|| {
-        let ctx = GpuContext::new(&GpuOptions::default())
-            .unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
-        eprintln!("adapter: {}", ctx.info);
-        ctx
-    })
-}
-
-/// The variants this adapter can run: always workgroup, subgroup when it has fixed 16k-wide subgroups.
-fn variants() -> Vec<VectorVariant> {
-    let mut v = vec![VectorVariant::Workgroup];
-    if VectorVariant::choose(&ctx().info, Some(VectorVariant::Subgroup)).is_ok() {
-        v.push(VectorVariant::Subgroup);
-    }
-    v
-}
-
-fn embedded(name: &str) -> (Scene, View) {
-    let s = assets::embedded_scene(name).unwrap();
-    (
-        Scene::from_bytes(s.glb, Path::new(s.file_name)).unwrap(),
-        s.view(),
-    )
-}
 
 /// A scene built in code: one triangle list, each triangle with its material
 /// index, flat normals and one white-ish material per entry of `colors`.

@@ -4,45 +4,15 @@
 
 mod support;
 
-use std::path::Path;
-use std::sync::OnceLock;
-
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::gpu::{
-    FrameSettings, GpuContext, GpuOptions, GpuScene, LeafMode, Renderer, RendererOptions, ShadowPass,
-    VectorVariant, empty_storage_buffer, read_buffer, storage_buffer,
+    FrameSettings, GpuScene, LeafMode, Renderer, RendererOptions, ShadowPass, empty_storage_buffer,
+    read_buffer, storage_buffer,
 };
 use penumbra::reference::shadow::{ITERATION_BUDGET, per_ray_masks, shadow_params};
-use penumbra::{assets, sampling, scene::Scene, view::View};
+use penumbra::{assets, sampling};
 use support::compare_masks;
-
-/// One context per test binary; a missing adapter fails every test with the reason.
-fn ctx() -> &'static GpuContext {
-    static CTX: OnceLock<GpuContext> = OnceLock::new();
-    CTX.get_or_init(|| {
-        let ctx = GpuContext::new(&GpuOptions::default())
-            .unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
-        eprintln!("adapter: {}", ctx.info);
-        ctx
-    })
-}
-
-/// The variants this adapter can run: always workgroup, subgroup when it has fixed 16k-wide subgroups.
-fn variants() -> Vec<VectorVariant> {
-    let mut v = vec![VectorVariant::Workgroup];
-    if VectorVariant::choose(&ctx().info, Some(VectorVariant::Subgroup)).is_ok() {
-        v.push(VectorVariant::Subgroup);
-    }
-    v
-}
-
-fn embedded(name: &str) -> (Scene, View) {
-    let s = assets::embedded_scene(name).unwrap();
-    (
-        Scene::from_bytes(s.glb, Path::new(s.file_name)).unwrap(),
-        s.view(),
-    )
-}
+use support::gpu::{ctx, embedded, variants};
 
 #[test]
 fn shadow_masks_match_the_per_ray_oracle_for_every_variant() {

@@ -6,6 +6,7 @@
 
 mod intersect;
 pub mod mft;
+mod parallel;
 pub mod primary;
 pub mod shade;
 pub mod shadow;

@@ -46,19 +46,8 @@ pub fn primary_texel(bvh: &Bvh, shading: &ShadingData, cam: &CameraParams, x: u3
 
 /// The whole G-buffer (row-major, row 0 at the top), rows spread over all cores.
 pub fn primary_gbuffer(bvh: &Bvh, shading: &ShadingData, cam: &CameraParams) -> Vec<GBufferTexel> {
-    let (w, h) = (cam.width as usize, cam.height as usize);
-    let mut out = vec![GBufferTexel::default(); w * h];
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let rows_per = h.div_ceil(threads).max(1);
-    std::thread::scope(|s| {
-        for (c, chunk) in out.chunks_mut(rows_per * w).enumerate() {
-            s.spawn(move || {
-                for (i, t) in chunk.iter_mut().enumerate() {
-                    let p = c * rows_per * w + i;
-                    *t = primary_texel(bvh, shading, cam, (p % w) as u32, (p / w) as u32);
-                }
-            });
-        }
-    });
-    out
+    let w = cam.width as usize;
+    super::parallel::per_pixel(w, cam.height as usize, |p| {
+        primary_texel(bvh, shading, cam, (p % w) as u32, (p / w) as u32)
+    })
 }

@@ -128,21 +128,10 @@ pub fn per_ray_masks(
         w * h,
         "G-buffer size does not match the parameters"
     );
-    let mut masks = vec![0u32; w * h];
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let rows_per = h.div_ceil(threads).max(1);
-    std::thread::scope(|s| {
-        for (chunk_ix, chunk) in masks.chunks_mut(rows_per * w).enumerate() {
-            s.spawn(move || {
-                for (i, m) in chunk.iter_mut().enumerate() {
-                    let p = chunk_ix * rows_per * w + i;
-                    let set = pixel_set((p % w) as u32, (p / w) as u32);
-                    *m = per_ray_mask(bvh, &gbuffer[p], set, light_points, params);
-                }
-            });
-        }
-    });
-    masks
+    super::parallel::per_pixel(w, h, |p| {
+        let set = pixel_set((p % w) as u32, (p / w) as u32);
+        per_ray_mask(bvh, &gbuffer[p], set, light_points, params)
+    })
 }
 
 /// Fraction of a mask's 16 rays that reach the light (1 for sky pixels).

@@ -4,6 +4,8 @@
 
 use glam::Vec3;
 
+pub mod gpu;
+
 /// PCG32 (O'Neill): small, deterministic, good enough for test inputs.
 pub struct Rng(u64);
 

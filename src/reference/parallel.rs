@@ -1,0 +1,24 @@
+//! Spreading per-pixel CPU oracle work over all cores.
+
+/// `f(p)` for every pixel index `p` of a row-major `width`×`height` image,
+/// bands of rows on separate threads.
+pub fn per_pixel<T: Send + Clone + Default>(
+    width: usize,
+    height: usize,
+    f: impl Fn(usize) -> T + Sync,
+) -> Vec<T> {
+    let mut out = vec![T::default(); width * height];
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let band = (height.div_ceil(threads).max(1) * width).max(1);
+    let f = &f;
+    std::thread::scope(|s| {
+        for (b, chunk) in out.chunks_mut(band).enumerate() {
+            s.spawn(move || {
+                for (i, v) in chunk.iter_mut().enumerate() {
+                    *v = f(b * band + i);
+                }
+            });
+        }
+    });
+    out
+}
