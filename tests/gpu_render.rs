@@ -9,9 +9,9 @@ use penumbra::gpu::{
     FrameSettings, GpuScene, LeafMode, Renderer, RendererOptions, ShadowPass, empty_storage_buffer,
     read_buffer, storage_buffer,
 };
-use penumbra::reference::shadow::{ITERATION_BUDGET, per_ray_masks, shadow_params};
+use penumbra::reference::shadow::{ITERATION_BUDGET, shadow_params};
 use penumbra::{assets, sampling};
-use support::compare_masks;
+use support::assert_masks_match_oracle;
 use support::gpu::{ctx, embedded, variants};
 
 #[test]
@@ -25,39 +25,17 @@ fn shadow_masks_match_the_per_ray_oracle_for_every_variant() {
         let (w, h) = (90, 70); // not a multiple of 4: edge tiles are partial
         let mut settings = FrameSettings::new(w, h);
         settings.keep_gbuffer = true;
-        let corners: Vec<_> = scene.triangles.iter().map(|t| t.positions).collect();
         let mut first: Option<Vec<u32>> = None;
         for &variant in &vs {
             let renderer = Renderer::new(ctx(), Some(variant)).unwrap();
             let frame = renderer.render(ctx(), &gpu_scene, &view, &settings).unwrap();
             let gbuffer = frame.gbuffer.as_ref().unwrap();
-            let params = shadow_params(&view.light, w, h);
-            let points = sampling::light_points(&view.light);
-            let oracle = per_ray_masks(&bvh, gbuffer, &points, &params);
-            let (differing, total, unexplained) = compare_masks(
-                &oracle,
-                &frame.masks,
-                gbuffer,
-                w,
-                &points,
-                &params,
-                &corners,
-                1e-4 * scene.bounds().diagonal(),
-            );
+            let label = format!("{} {variant}", s.name);
+            let (differing, total, _) =
+                assert_masks_match_oracle(&label, &scene, &bvh, &view, gbuffer, &frame.masks, w, h);
             eprintln!(
-                "{} {variant}: {differing} of {total} rays differ from the oracle; timings {:?}",
-                s.name, frame.timings
-            );
-            assert!(
-                unexplained.is_empty(),
-                "{} {variant}: {:?}",
-                s.name,
-                &unexplained[..unexplained.len().min(10)]
-            );
-            assert!(
-                differing * 1000 <= total,
-                "{} {variant}: {differing} of {total}",
-                s.name
+                "{label}: {differing} of {total} rays differ from the oracle; timings {:?}",
+                frame.timings
             );
             match &first {
                 None => first = Some(frame.masks.clone()),
@@ -78,9 +56,6 @@ fn transposed_leaves_give_the_per_lane_masks_bit_for_bit() {
         let (w, h) = (90, 70); // not a multiple of 4: edge tiles are partial
         let mut settings = FrameSettings::new(w, h);
         settings.keep_gbuffer = true;
-        let corners: Vec<_> = scene.triangles.iter().map(|t| t.positions).collect();
-        let params = shadow_params(&view.light, w, h);
-        let points = sampling::light_points(&view.light);
         for &variant in &vs {
             let mut per_lane: Option<Vec<u32>> = None;
             for leaf_mode in [LeafMode::PerLane, LeafMode::Transposed] {
@@ -92,33 +67,12 @@ fn transposed_leaves_give_the_per_lane_masks_bit_for_bit() {
                 assert_eq!((renderer.variant(), renderer.leaf_mode()), (variant, leaf_mode));
                 let frame = renderer.render(ctx(), &gpu_scene, &view, &settings).unwrap();
                 let gbuffer = frame.gbuffer.as_ref().unwrap();
-                let oracle = per_ray_masks(&bvh, gbuffer, &points, &params);
-                let (differing, total, unexplained) = compare_masks(
-                    &oracle,
-                    &frame.masks,
-                    gbuffer,
-                    w,
-                    &points,
-                    &params,
-                    &corners,
-                    1e-4 * scene.bounds().diagonal(),
-                );
+                let label = format!("{} {variant} {leaf_mode}", s.name);
+                let (differing, total, _) =
+                    assert_masks_match_oracle(&label, &scene, &bvh, &view, gbuffer, &frame.masks, w, h);
                 eprintln!(
-                    "{} {variant} {leaf_mode}: {differing} of {total} rays differ from the oracle; \
-                     shadow {:.1} ms",
-                    s.name,
+                    "{label}: {differing} of {total} rays differ from the oracle; shadow {:.1} ms",
                     frame.pass_ms("shadow")
-                );
-                assert!(
-                    unexplained.is_empty(),
-                    "{} {variant} {leaf_mode}: {:?}",
-                    s.name,
-                    &unexplained[..unexplained.len().min(10)]
-                );
-                assert!(
-                    differing * 1000 <= total,
-                    "{} {variant} {leaf_mode}: {differing} of {total}",
-                    s.name
                 );
                 match &per_lane {
                     None => per_lane = Some(frame.masks.clone()),

@@ -135,6 +135,27 @@ impl Kernel {
     }
 }
 
+impl Kernel {
+    /// Records one compute pass named `label` that runs this kernel over
+    /// `groups` workgroups with `bind` as group 0.
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        label: &str,
+        bind: &wgpu::BindGroup,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+        groups: (u32, u32),
+    ) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(label),
+            timestamp_writes,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bind, &[]);
+        pass.dispatch_workgroups(groups.0, groups.1, 1);
+    }
+}
+
 /// A uniform buffer holding `value`.
 pub fn uniform_buffer<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, value: &T) -> wgpu::Buffer {
     use wgpu::util::DeviceExt;

@@ -233,13 +233,9 @@ impl Renderer {
                     &scene.texels,
                 ],
             );
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("primary"),
-                timestamp_writes: timer.pass_writes("primary"),
-            });
-            pass.set_pipeline(&self.primary.pipeline);
-            pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(groups.0, groups.1, 1);
+            let writes = timer.pass_writes("primary");
+            self.primary
+                .record(&mut encoder, "primary", &bind, writes, groups);
         }
         ctx.queue.submit([encoder.finish()]);
         if read_buffer::<u32>(ctx, &status, 0..4)?[0] != 0 {
@@ -266,13 +262,8 @@ impl Renderer {
                 ctx,
                 &[&shade_buf, &gbuffer, &masks, &values, &depth, &normal, &brdf],
             );
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("shade"),
-                timestamp_writes: timer.pass_writes("shade"),
-            });
-            pass.set_pipeline(&self.shade.pipeline);
-            pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(groups.0, groups.1, 1);
+            let writes = timer.pass_writes("shade");
+            self.shade.record(&mut encoder, "shade", &bind, writes, groups);
         }
         if let Some((depth_tolerance, normal_tolerance)) = settings.filter {
             let params = FilterParams {
@@ -285,13 +276,8 @@ impl Renderer {
             let bind = self
                 .filter
                 .bind(ctx, &[&params_buf, &values, &depth, &normal, &filtered]);
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("filter"),
-                timestamp_writes: timer.pass_writes("filter"),
-            });
-            pass.set_pipeline(&self.filter.pipeline);
-            pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(groups.0, groups.1, 1);
+            let writes = timer.pass_writes("filter");
+            self.filter.record(&mut encoder, "filter", &bind, writes, groups);
         }
         timer.resolve(&mut encoder);
         ctx.queue.submit([encoder.finish()]);

@@ -233,15 +233,9 @@ impl ShadowPass {
                     ctx.queue.write_buffer(&params_buf, 0, bytemuck::bytes_of(&p));
                     let mut encoder = ctx.device.create_command_encoder(&Default::default());
                     encoder.clear_buffer(&status, 0, None);
-                    {
-                        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                            label: Some("shadow/trace"),
-                            timestamp_writes: timer.as_deref_mut().and_then(|t| t.pass_writes("shadow")),
-                        });
-                        pass.set_pipeline(&self.kernel.pipeline);
-                        pass.set_bind_group(0, &bind, &[]);
-                        pass.dispatch_workgroups(groups, 1, 1);
-                    }
+                    let writes = timer.as_deref_mut().and_then(|t| t.pass_writes("shadow"));
+                    self.kernel
+                        .record(&mut encoder, "shadow/trace", &bind, writes, (groups, 1));
                     ctx.queue.submit([encoder.finish()]);
                     stats.dispatches += 1;
                     let suspended = read_buffer::<u32>(ctx, &status, 0..4)?[0];
