@@ -347,7 +347,7 @@ mod tests {
 
     #[test]
     fn shadow_kernel_has_the_overrides_the_pass_sets() {
-        // ShadowPass sets these by name; a rename would only fail at pipeline creation.
+        // ShadowTracer sets these by name; a rename would only fail at pipeline creation.
         for &aliases in KERNELS.iter().find(|(k, _)| *k == "shadow_mft").unwrap().1 {
             let module = validate(&assemble("shadow_mft", aliases).unwrap()).unwrap();
             let leaf = module

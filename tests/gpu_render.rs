@@ -6,7 +6,7 @@ mod support;
 
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::gpu::{
-    FrameSettings, GpuScene, LeafMode, Renderer, RendererOptions, ShadowPass, empty_storage_buffer,
+    FrameSettings, GpuScene, LeafMode, Renderer, RendererOptions, ShadowTracer, empty_storage_buffer,
     read_buffer, storage_buffer,
 };
 use penumbra::reference::shadow::{ITERATION_BUDGET, shadow_params};
@@ -120,7 +120,7 @@ fn transposed_leaves_resume_after_suspension_with_the_same_masks() {
     let masks = empty_storage_buffer(ctx(), "masks", bytes, wgpu::BufferUsages::COPY_SRC).unwrap();
     for variant in variants() {
         for leaf_mode in [LeafMode::PerLane, LeafMode::Transposed] {
-            let pass = ShadowPass::new(ctx(), Some(variant), leaf_mode).unwrap();
+            let pass = ShadowTracer::new(ctx(), Some(variant), leaf_mode).unwrap();
             // An odd budget far below a tile's work: tiles stop at every kind of step.
             for budget in [ITERATION_BUDGET, 97] {
                 let mut params = shadow_params(&view.light, w, h);

@@ -42,6 +42,28 @@ pub struct AdapterSummary {
     pub max_compute_workgroups_per_dimension: u32,
 }
 
+impl AdapterSummary {
+    /// The summary of `device`'s adapter and of the features and limits it was created with.
+    pub fn of(device: &wgpu::Device) -> AdapterSummary {
+        let adapter_info = device.adapter_info();
+        let features = device.features();
+        let limits = device.limits();
+        AdapterSummary {
+            name: adapter_info.name,
+            backend: adapter_info.backend,
+            device_type: adapter_info.device_type,
+            driver: adapter_info.driver,
+            driver_info: adapter_info.driver_info,
+            subgroup_min_size: adapter_info.subgroup_min_size,
+            subgroup_max_size: adapter_info.subgroup_max_size,
+            has_subgroups: features.contains(wgpu::Features::SUBGROUP),
+            has_timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
+            max_storage_buffer_binding_size: limits.max_storage_buffer_binding_size,
+            max_compute_workgroups_per_dimension: limits.max_compute_workgroups_per_dimension,
+        }
+    }
+}
+
 impl fmt::Display for AdapterSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
@@ -66,10 +88,11 @@ impl fmt::Display for AdapterSummary {
 /// Everything needed to run compute work: the wgpu objects plus a summary of the adapter.
 #[derive(Debug)]
 pub struct GpuContext {
-    /// The wgpu instance the adapter came from.
-    pub instance: wgpu::Instance,
-    /// The chosen adapter.
-    pub adapter: wgpu::Adapter,
+    /// The wgpu instance the adapter came from (`None` for a host's device, see
+    /// [`GpuContext::from_device`]).
+    pub instance: Option<wgpu::Instance>,
+    /// The chosen adapter (`None` for a host's device).
+    pub adapter: Option<wgpu::Adapter>,
     /// The device, created with the adapter's own limits.
     pub device: wgpu::Device,
     /// The device's queue.
@@ -110,29 +133,26 @@ impl GpuContext {
         }))
         .map_err(|e| Error::Device(e.to_string()))?;
 
-        let adapter_info = adapter.get_info();
-        let features = device.features();
-        let limits = device.limits();
-        let info = AdapterSummary {
-            name: adapter_info.name,
-            backend: adapter_info.backend,
-            device_type: adapter_info.device_type,
-            driver: adapter_info.driver,
-            driver_info: adapter_info.driver_info,
-            subgroup_min_size: adapter_info.subgroup_min_size,
-            subgroup_max_size: adapter_info.subgroup_max_size,
-            has_subgroups: features.contains(wgpu::Features::SUBGROUP),
-            has_timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
-            max_storage_buffer_binding_size: limits.max_storage_buffer_binding_size,
-            max_compute_workgroups_per_dimension: limits.max_compute_workgroups_per_dimension,
-        };
+        let info = AdapterSummary::of(&device);
         Ok(GpuContext {
-            instance,
-            adapter,
+            instance: Some(instance),
+            adapter: Some(adapter),
             device,
             queue,
             info,
         })
+    }
+
+    /// A context around a device the caller already has (an application embedding
+    /// penumbra): `device` and `queue` are shared handles, so the caller keeps using them.
+    pub fn from_device(device: &wgpu::Device, queue: &wgpu::Queue) -> GpuContext {
+        GpuContext {
+            instance: None,
+            adapter: None,
+            info: AdapterSummary::of(device),
+            device: device.clone(),
+            queue: queue.clone(),
+        }
     }
 
     /// Runs `f` inside validation and out-of-memory error scopes, turning an error that wgpu

@@ -119,6 +119,11 @@ impl Kernel {
 
     /// A bind group with `buffers[i]` (whole) at binding `i`.
     pub fn bind(&self, ctx: &GpuContext, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+        self.bind_on(&ctx.device, buffers)
+    }
+
+    /// [`Kernel::bind`] on a bare device (for passes recorded into a host's encoder).
+    pub fn bind_on(&self, device: &wgpu::Device, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
         let entries: Vec<wgpu::BindGroupEntry> = buffers
             .iter()
             .enumerate()
@@ -127,7 +132,7 @@ impl Kernel {
                 resource: b.as_entire_binding(),
             })
             .collect();
-        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(&self.name),
             layout: &self.layout,
             entries: &entries,
@@ -158,8 +163,13 @@ impl Kernel {
 
 /// A uniform buffer holding `value`.
 pub fn uniform_buffer<T: bytemuck::Pod>(ctx: &GpuContext, label: &str, value: &T) -> wgpu::Buffer {
+    uniform_buffer_on(&ctx.device, label, value)
+}
+
+/// [`uniform_buffer`] on a bare device.
+pub fn uniform_buffer_on<T: bytemuck::Pod>(device: &wgpu::Device, label: &str, value: &T) -> wgpu::Buffer {
     use wgpu::util::DeviceExt;
-    ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some(label),
         contents: bytemuck::bytes_of(value),
         usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,

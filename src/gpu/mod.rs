@@ -11,12 +11,12 @@ mod context;
 pub mod kernel;
 pub mod render;
 mod scene_buffers;
-pub mod shadow_pass;
+pub mod shadow_tracer;
 mod timer;
 
 pub use buffers::{empty_storage_buffer, read_buffer, storage_buffer};
 pub use context::{ADAPTER_ENV, AdapterSummary, GpuContext, GpuOptions};
 pub use render::{Frame, FrameSettings, Renderer, RendererOptions};
 pub use scene_buffers::{GpuScene, validate_for_gpu};
-pub use shadow_pass::{LeafMode, ShadowPass, ShadowStats, VectorVariant};
+pub use shadow_tracer::{LeafMode, ShadowScratch, ShadowStats, ShadowTracer, VectorVariant};
 pub use timer::GpuTimer;

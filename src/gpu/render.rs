@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use super::kernel::{Binding, Checks, Kernel, uniform_buffer};
-use super::shadow_pass::{LeafMode, ShadowPass, ShadowStats, VectorVariant};
+use super::shadow_tracer::{LeafMode, ShadowStats, ShadowTracer, VectorVariant};
 use super::{GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer, storage_buffer};
 use crate::filter::FilterParams;
 use crate::frame::{RAY_OFFSET_FRACTION, camera_params};
@@ -113,7 +113,7 @@ impl From<Option<VectorVariant>> for RendererOptions {
 #[derive(Debug)]
 pub struct Renderer {
     primary: Kernel,
-    shadow: ShadowPass,
+    shadow: ShadowTracer,
     shade: Kernel,
     filter: Kernel,
 }
@@ -136,7 +136,7 @@ impl Renderer {
                 &[],
                 Checks::Unchecked,
             )?,
-            shadow: ShadowPass::new(ctx, options.variant, options.leaf_mode)?,
+            shadow: ShadowTracer::new(ctx, options.variant, options.leaf_mode)?,
             shade: Kernel::new(
                 ctx,
                 "shade",

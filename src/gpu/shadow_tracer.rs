@@ -7,7 +7,7 @@
 //! dispatches again to resume the suspended tiles until none is left. So a
 //! tile with any amount of work gets the same answer as an uninterrupted one.
 
-use super::kernel::{Binding, Checks, Kernel, uniform_buffer};
+use super::kernel::{Binding, Checks, Kernel, uniform_buffer, uniform_buffer_on};
 use super::{AdapterSummary, GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer};
 use crate::layout::ShadowParams;
 use crate::{Error, Result};
@@ -125,7 +125,7 @@ pub struct ShadowStats {
 
 /// The shadow pass's pipeline for one vector variant and leaf mode.
 #[derive(Debug)]
-pub struct ShadowPass {
+pub struct ShadowTracer {
     kernel: Kernel,
     /// The vector variant this pass runs.
     pub variant: VectorVariant,
@@ -134,10 +134,14 @@ pub struct ShadowPass {
     vectors_per_workgroup: u32,
 }
 
-impl ShadowPass {
+impl ShadowTracer {
     /// Builds the pipeline; `variant` as in [`VectorVariant::choose`], `leaf_mode` sets the
     /// kernel's `LEAF_TRANSPOSED` override.
-    pub fn new(ctx: &GpuContext, variant: Option<VectorVariant>, leaf_mode: LeafMode) -> Result<ShadowPass> {
+    pub fn new(
+        ctx: &GpuContext,
+        variant: Option<VectorVariant>,
+        leaf_mode: LeafMode,
+    ) -> Result<ShadowTracer> {
         let (variant, vectors_per_workgroup) = VectorVariant::choose(&ctx.info, variant)?;
         let transposed = f64::from(u8::from(leaf_mode == LeafMode::Transposed));
         let mut constants: Vec<(&str, f64)> = vec![("LEAF_TRANSPOSED", transposed)];
@@ -159,7 +163,7 @@ impl ShadowPass {
             // with lane numbers (< 16) and the vector's index in its workgroup.
             Checks::Unchecked,
         )?;
-        Ok(ShadowPass {
+        Ok(ShadowTracer {
             kernel,
             variant,
             leaf_mode,
@@ -249,5 +253,115 @@ impl ShadowPass {
             }
         }
         Ok(stats)
+    }
+
+    /// Records the whole shadow pass into `encoder` without waiting on the GPU, for hosts
+    /// that submit it with their own frame: each chunk of tiles gets its first dispatch and
+    /// then `resume_rounds` resume dispatches (a resume dispatch over a chunk with nothing
+    /// suspended costs one early exit per tile). The tiles still suspended after a chunk's
+    /// last round are counted into `unfinished[chunk]` (`u32`s, one per chunk, see
+    /// [`ShadowTracer::chunks`]); a non-zero count means the masks of those tiles are
+    /// incomplete and `resume_rounds` was too small for this scene and view.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        gbuffer: &wgpu::Buffer,
+        light_points: &wgpu::Buffer,
+        masks: &wgpu::Buffer,
+        scratch: &ShadowScratch,
+        params: &ShadowParams,
+        resume_rounds: u32,
+    ) {
+        let (tiles_x, tiles_y) = (params.width.div_ceil(4), params.height.div_ceil(4));
+        let mut chunk_index = 0u64;
+        for ty0 in (0..tiles_y).step_by(CHUNK_TILES as usize) {
+            for tx0 in (0..tiles_x).step_by(CHUNK_TILES as usize) {
+                let mut p = *params;
+                p.tile_origin_x = tx0;
+                p.tile_origin_y = ty0;
+                p.tiles_x = CHUNK_TILES.min(tiles_x - tx0);
+                p.tiles_y = CHUNK_TILES.min(tiles_y - ty0);
+                let groups = (p.tiles_x * p.tiles_y).div_ceil(self.vectors_per_workgroup);
+                for round in 0..=resume_rounds {
+                    p.resume = u32::from(round > 0);
+                    if round == resume_rounds {
+                        encoder.clear_buffer(&scratch.status, 0, None);
+                    }
+                    let params_buf = uniform_buffer_on(device, "shadow params", &p);
+                    let bind = self.kernel.bind_on(
+                        device,
+                        &[
+                            &params_buf,
+                            &scene.nodes,
+                            &scene.triangles,
+                            gbuffer,
+                            light_points,
+                            masks,
+                            &scratch.state,
+                            &scratch.status,
+                        ],
+                    );
+                    self.kernel
+                        .record(encoder, "shadow/trace", &bind, None, (groups, 1));
+                }
+                encoder.copy_buffer_to_buffer(&scratch.status, 0, &scratch.unfinished, chunk_index * 4, 4);
+                chunk_index += 1;
+            }
+        }
+    }
+
+    /// Chunks of tiles a `width`×`height` image is traced in (one `unfinished` count each).
+    pub fn chunks(width: u32, height: u32) -> u64 {
+        let (tiles_x, tiles_y) = (width.div_ceil(4), height.div_ceil(4));
+        u64::from(tiles_x.div_ceil(CHUNK_TILES)) * u64::from(tiles_y.div_ceil(CHUNK_TILES))
+    }
+}
+
+/// The buffers [`ShadowTracer::record`] needs besides its inputs and outputs, sized for
+/// one image size: suspended-tile state, the per-dispatch suspension counter, and the
+/// per-chunk count of tiles left unfinished (`COPY_SRC`, for the host to read).
+#[derive(Debug)]
+pub struct ShadowScratch {
+    /// Suspended state of one chunk's tiles.
+    pub state: wgpu::Buffer,
+    /// `[0]`: tiles suspended by the dispatch just run.
+    pub status: wgpu::Buffer,
+    /// `u32` per chunk: tiles still suspended after the chunk's last round.
+    pub unfinished: wgpu::Buffer,
+}
+
+impl ShadowScratch {
+    /// Scratch buffers for `width`×`height` images, on `device`.
+    pub fn new(device: &wgpu::Device, width: u32, height: u32) -> ShadowScratch {
+        let tiles = u64::from(CHUNK_TILES.min(width.div_ceil(4)).max(1))
+            * u64::from(CHUNK_TILES.min(height.div_ceil(4)).max(1));
+        let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | usage,
+                mapped_at_creation: false,
+            })
+        };
+        ShadowScratch {
+            state: buffer(
+                "shadow state",
+                tiles * STATE_WORDS * 4,
+                wgpu::BufferUsages::empty(),
+            ),
+            status: buffer(
+                "shadow status",
+                16,
+                wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            ),
+            unfinished: buffer(
+                "shadow unfinished tiles",
+                ShadowTracer::chunks(width, height) * 4,
+                wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            ),
+        }
     }
 }
