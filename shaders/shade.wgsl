@@ -5,6 +5,9 @@
 
 const PI: f32 = 3.14159265358979;
 const MASK_SKY: u32 = 0x10000u;
+// 0: masks hold 16 ray bits. Otherwise the reference tracer's count of blocked
+// rays out of REFERENCE_RAYS.
+override REFERENCE_RAYS: u32 = 0u;
 
 @group(0) @binding(0) var<uniform> params: ShadeParams;
 @group(0) @binding(1) var<storage, read> gbuffer: array<GBufferTexel>;
@@ -31,7 +34,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         values[p] = vec4<f32>(0.0, 0.0, 0.0, 1.0);
         return;
     }
-    let visibility = f32(16u - countOneBits(mask & 0xffffu)) / 16.0;
+    var visibility = f32(16u - countOneBits(mask & 0xffffu)) / 16.0;
+    if REFERENCE_RAYS != 0u {
+        visibility = 1.0 - f32(mask) / f32(REFERENCE_RAYS);
+    }
     let w = params.light_center - texel.origin;
     let r2 = max(dot(w, w), 1e-12);
     let r = sqrt(r2);

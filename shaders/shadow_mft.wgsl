@@ -25,6 +25,10 @@ const STATUS_SUSPENDED: u32 = 1u;
 // for each frustum f that is left, lane i tests ray i of f and a ballot gives
 // f's 16 bits. Both modes compute every bit with the same arithmetic.
 override LEAF_TRANSPOSED: bool = false;
+// Table 1 counters into status[1..6] (src/reference/counters.rs); off: no cost.
+override COUNTERS: bool = false;
+// Set in a per-lane test_triangle result when the frustum survived culling.
+const TESTED: u32 = 0x20000u;
 
 @group(0) @binding(0) var<uniform> params: ShadowParams;
 @group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
@@ -33,7 +37,7 @@ override LEAF_TRANSPOSED: bool = false;
 @group(0) @binding(4) var<storage, read> light_points: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> masks: array<u32>;
 @group(0) @binding(6) var<storage, read_write> state: array<u32>;
-// [0]: tiles suspended by this dispatch.
+// [0]: tiles suspended by this dispatch; [1..6]: counters.
 @group(0) @binding(7) var<storage, read_write> status: array<atomic<u32>>;
 
 // This lane's frustum.
@@ -173,7 +177,8 @@ fn frustum_culls_triangle(tri: BvhTriangle) -> bool {
 }
 
 // Per-lane leaves: culls the triangle against this lane's frustum, else tests
-// its 16 rays; the arithmetic of reference::mft::frustum_test_triangle, in the same order.
+// its 16 rays (hit bits | TESTED); the arithmetic of
+// reference::mft::frustum_test_triangle, in the same order.
 fn test_triangle(tri: BvhTriangle) -> u32 {
     if planes_cull(tri) {
         return 0u;
@@ -183,7 +188,7 @@ fn test_triangle(tri: BvhTriangle) -> u32 {
         return 0u;
     }
     // Unrolled on purpose: every loop iteration counts towards lavapipe's limit.
-    return ray_bit(0u, w) | ray_bit(1u, w) | ray_bit(2u, w) | ray_bit(3u, w)
+    return TESTED | ray_bit(0u, w) | ray_bit(1u, w) | ray_bit(2u, w) | ray_bit(3u, w)
         | ray_bit(4u, w) | ray_bit(5u, w) | ray_bit(6u, w) | ray_bit(7u, w)
         | ray_bit(8u, w) | ray_bit(9u, w) | ray_bit(10u, w) | ray_bit(11u, w)
         | ray_bit(12u, w) | ray_bit(13u, w) | ray_bit(14u, w) | ray_bit(15u, w);
@@ -236,6 +241,11 @@ fn main(ids: Vec16Ids) {
     var cand = 0u;      // transposed leaves: frusta still to test against triangle cursor - 1
     var cand_tri: BvhTriangle;  // that triangle, loaded once for all its candidates
     var running = true;
+    var n_nodes = 0u;
+    var n_boxes = 0u;
+    var n_tris = 0u;
+    var n_after_culling = 0u;
+    var n_tests = 0u;
     if params.resume != 0u {
         node = uniform16(state[base + 1u]);
         mask = uniform16(state[base + 2u]);
@@ -257,6 +267,7 @@ fn main(ids: Vec16Ids) {
         alive = ballot16(!is_done());
         let root = nodes[0];
         mask = ballot16(!is_done() && frustum_may_hit_box(root));
+        n_boxes = 1u;
         running = mask != 0u;
         if root.count > 0u {
             cursor = root.first;
@@ -289,12 +300,24 @@ fn main(ids: Vec16Ids) {
             if cand == 0u {
                 let tri = triangles[cursor];
                 cursor += 1u;
+                n_tris += 1u;
                 let mine = (mask & (1u << g_lane)) != 0u && !is_done();
                 if LEAF_TRANSPOSED {
                     cand_tri = tri;
                     cand = ballot16(mine && !frustum_culls_triangle(tri));
-                } else if mine {
-                    f_occluded |= test_triangle(tri);
+                    n_tests += countOneBits(cand);
+                    n_after_culling += u32(cand != 0u);
+                } else {
+                    var r = 0u;
+                    if mine {
+                        r = test_triangle(tri);
+                    }
+                    f_occluded |= r & MASK_FULL;
+                    if COUNTERS {
+                        let tested = ballot16((r & TESTED) != 0u);
+                        n_tests += countOneBits(tested);
+                        n_after_culling += u32(tested != 0u);
+                    }
                 }
             }
         } else if popping != 0u {
@@ -312,6 +335,8 @@ fn main(ids: Vec16Ids) {
             }
         } else {
             let l = nodes[node].first;
+            n_nodes += 1u;
+            n_boxes += 2u;
             let mine = (mask & (1u << g_lane)) != 0u && !is_done();
             let ml = ballot16(mine && frustum_may_hit_box(nodes[l]));
             let mr = ballot16(mine && frustum_may_hit_box(nodes[l + 1u]));
@@ -367,6 +392,13 @@ fn main(ids: Vec16Ids) {
                 end = c.first + c.count;
             }
         }
+    }
+    if COUNTERS && g_lane == 0u {
+        atomicAdd(&status[1], n_nodes);
+        atomicAdd(&status[2], n_boxes);
+        atomicAdd(&status[3], n_tris);
+        atomicAdd(&status[4], n_after_culling);
+        atomicAdd(&status[5], n_tests);
     }
     if suspended {
         // Out of budget: save the state; the next dispatch resumes this tile.

@@ -68,9 +68,54 @@ pub fn light_points(light: &QuadLight) -> Vec<Vec3> {
         .collect()
 }
 
+/// `n` Hammersley points in [0, 1)² for the reference tracer, cell-centred:
+/// `((i + ½)/n, φ₂(i) + ½/n)` with `φ₂` the base-2 radical inverse, the `v`
+/// coordinate kept below 1. Every column of width 1/n holds one point, and for
+/// `n` a power of two every row of height 1/n too.
+pub fn hammersley(n: u32) -> Vec<Vec2> {
+    let n_f = n as f32;
+    (0..n)
+        .map(|i| {
+            let radical = i.reverse_bits() as f64 / 4_294_967_296.0;
+            let v = (radical + 0.5 / f64::from(n)).min(1.0 - 0.5 / f64::from(n));
+            Vec2::new((i as f32 + 0.5) / n_f, v as f32)
+        })
+        .collect()
+}
+
+/// World-space points of [`hammersley`]`(n)` on the light: the reference tracer's
+/// `n` rays per pixel go to these same points from every pixel.
+pub fn reference_light_points(light: &QuadLight, n: u32) -> Vec<Vec3> {
+    hammersley(n)
+        .iter()
+        .map(|p| light.corner + p.x * light.edge_u + p.y * light.edge_v)
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn reference_points_are_stratified_and_inside() {
+        for n in [1, 7, 64, 256] {
+            let points = hammersley(n);
+            let mut cols = vec![0; n as usize];
+            for p in &points {
+                assert!(p.x > 0.0 && p.x < 1.0 && p.y > 0.0 && p.y < 1.0, "{p} outside");
+                cols[(p.x * n as f32) as usize] += 1;
+            }
+            assert!(
+                cols.iter().all(|&c| c == 1),
+                "n = {n}: a column without exactly one point"
+            );
+        }
+        let mut rows = [0; 64];
+        for p in hammersley(64) {
+            rows[(p.y * 64.0) as usize] += 1;
+        }
+        assert!(rows.iter().all(|&c| c == 1));
+    }
 
     /// Whether each set has one point in every 1/16 column and every 1/16 row.
     fn is_latin(set: &[Vec2]) -> bool {

@@ -30,6 +30,8 @@ pub static SOURCES: &[(&str, &str)] = &[
     ("primary", include_str!("../shaders/primary.wgsl")),
     ("shade", include_str!("../shaders/shade.wgsl")),
     ("shadow_mft", include_str!("../shaders/shadow_mft.wgsl")),
+    ("shadow_packet", include_str!("../shaders/shadow_packet.wgsl")),
+    ("shadow_per_ray", include_str!("../shaders/shadow_per_ray.wgsl")),
     ("shared/bvh", include_str!("../shaders/shared/bvh.wgsl")),
     ("shared/frame", include_str!("../shaders/shared/frame.wgsl")),
     (
@@ -63,6 +65,14 @@ pub const KERNELS: &[(&str, &[Aliases<'static>])] = &[
             &[("shared/vec16", "shared/vec16_workgroup")],
         ],
     ),
+    (
+        "shadow_packet",
+        &[
+            &[("shared/vec16", "shared/vec16_subgroup")],
+            &[("shared/vec16", "shared/vec16_workgroup")],
+        ],
+    ),
+    ("shadow_per_ray", &[&[]]),
 ];
 
 /// What [`validate`] allows beyond core WGSL: exactly what [`crate::gpu::GpuContext`] may

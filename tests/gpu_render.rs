@@ -62,6 +62,7 @@ fn transposed_leaves_give_the_per_lane_masks_bit_for_bit() {
                 let options = RendererOptions {
                     variant: Some(variant),
                     leaf_mode,
+                    ..RendererOptions::default()
                 };
                 let renderer = Renderer::new(ctx(), options).unwrap();
                 assert_eq!((renderer.variant(), renderer.leaf_mode()), (variant, leaf_mode));

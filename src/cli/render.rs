@@ -7,7 +7,8 @@ use penumbra::Result;
 use penumbra::bvh::Bvh;
 use penumbra::filter::FilterParams;
 use penumbra::gpu::{
-    FrameSettings, GpuContext, GpuOptions, GpuScene, LeafMode, Renderer, RendererOptions, VectorVariant,
+    FrameSettings, GpuContext, GpuOptions, GpuScene, LeafMode, Renderer, RendererOptions, Tracer,
+    VectorVariant,
 };
 use penumbra::output::{FloatImage, HdrImage, ToneMap, write_float_image, write_image};
 use penumbra::reference::shadow::MASK_SKY;
@@ -76,9 +77,14 @@ pub struct RenderArgs {
     /// Image size WIDTHxHEIGHT in pixels (any size; edge tiles are partial).
     #[arg(long, default_value = "512x512", value_parser = parse_size)]
     size: (u32, u32),
-    /// Shadow rays per pixel (multi-frusta tracing uses 16: one interleaved set per pixel).
-    #[arg(long, default_value_t = 16)]
-    spp: u32,
+    /// Shadow tracer: mft (multi-frusta), packet (16-ray packets), per-ray, or reference
+    /// (--spp rays per pixel to the same stratified points, unfiltered).
+    #[arg(long, default_value = "mft", value_parser = parse_tracer)]
+    tracer: Tracer,
+    /// Shadow rays per pixel: 16 for mft, packet and per-ray (one interleaved set per
+    /// pixel); any number up to 65535 for reference (default 256).
+    #[arg(long)]
+    spp: Option<u32>,
     /// Skip the 4x4 discontinuity filter.
     #[arg(long)]
     no_filter: bool,
@@ -110,6 +116,10 @@ pub struct RenderArgs {
     bvh: BvhArgs,
 }
 
+fn parse_tracer(s: &str) -> std::result::Result<Tracer, String> {
+    s.parse()
+}
+
 fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
@@ -133,12 +143,21 @@ fn aov_path(output: &Path, name: &str) -> PathBuf {
 
 /// Renders and writes the image(s), printing what ran and how long it took.
 pub fn run(args: &RenderArgs) -> Result<()> {
-    if args.spp != 16 {
-        return Err(penumbra::Error::Gpu(format!(
-            "--spp {}: the multi-frusta tracer traces exactly 16 rays per pixel",
-            args.spp
-        )));
-    }
+    let tracer = match (args.tracer, args.spp) {
+        (Tracer::Reference { .. }, Some(rays)) if (1..=65_535).contains(&rays) => Tracer::Reference { rays },
+        (Tracer::Reference { .. }, Some(rays)) => {
+            return Err(penumbra::Error::Gpu(format!(
+                "--spp {rays}: the reference tracer takes 1 to 65535 rays per pixel"
+            )));
+        }
+        (tracer, None) | (tracer, Some(16)) => tracer,
+        (tracer, Some(spp)) => {
+            return Err(penumbra::Error::Gpu(format!(
+                "--spp {spp}: the {tracer} tracer traces exactly 16 rays per pixel \
+                 (use --tracer reference for other counts)"
+            )));
+        }
+    };
     let ext = args
         .output
         .extension()
@@ -186,16 +205,22 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         RendererOptions {
             variant: forced,
             leaf_mode: args.leaf_mode.into(),
+            tracer,
+            counters: false,
         },
     )?;
-    println!(
-        "vector    {} ({} leaves)",
-        renderer.variant(),
-        renderer.leaf_mode()
-    );
+    if tracer.uses_vector() {
+        println!(
+            "tracer    {tracer}, vector {} ({} leaves)",
+            renderer.variant(),
+            renderer.leaf_mode()
+        );
+    } else {
+        println!("tracer    {tracer}");
+    }
     let gpu_scene = GpuScene::new(&ctx, &scene, &bvh)?;
     let mut settings = FrameSettings::new(width, height);
-    if args.no_filter {
+    if args.no_filter || matches!(tracer, Tracer::Reference { .. }) {
         settings.filter = None;
     } else {
         settings.filter = Some((args.depth_tolerance, args.normal_tolerance));
@@ -204,9 +229,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     // keeps compilation out of the timings below.
     eprint!("compiling kernels…\r");
     renderer.render(&ctx, &gpu_scene, &view, &FrameSettings::new(8, 8))?;
+    let unit = tracer.unit();
+    let rays_per_pixel = f64::from(tracer.rays_per_pixel());
     let start = Instant::now();
     let frame = renderer.render_with_progress(&ctx, &gpu_scene, &view, &settings, &mut |done, total| {
-        eprint!("\rshadow    {done}/{total} tiles of 4x4   ");
+        eprint!(
+            "\rshadow    {done}/{total} {}   ",
+            if unit == 4 { "tiles of 4x4" } else { "pixels" }
+        );
     })?;
     eprint!("\r{:60}\r", "");
     let wall = start.elapsed().as_secs_f64();
@@ -222,11 +252,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     let shadow_ms = frame.pass_ms("shadow");
     println!(
-        "rays      {:.2} M shadow rays ({} px with geometry x 16), {:.2} Mrays/s in the shadow pass",
-        hits * 16.0 / 1e6,
+        "rays      {:.2} M shadow rays ({} px with geometry x {rays_per_pixel}), {:.2} Mrays/s in the shadow pass",
+        hits * rays_per_pixel / 1e6,
         hits,
         if shadow_ms > 0.0 {
-            hits * 16.0 / (shadow_ms * 1e3)
+            hits * rays_per_pixel / (shadow_ms * 1e3)
         } else {
             f64::NAN
         }

@@ -13,10 +13,12 @@ pub mod render;
 mod scene_buffers;
 pub mod shadow_tracer;
 mod timer;
+mod tracer;
 
 pub use buffers::{empty_storage_buffer, read_buffer, storage_buffer};
 pub use context::{ADAPTER_ENV, AdapterSummary, GpuContext, GpuOptions};
 pub use render::{Frame, FrameSettings, Renderer, RendererOptions};
 pub use scene_buffers::{GpuScene, validate_for_gpu};
-pub use shadow_tracer::{LeafMode, ShadowScratch, ShadowStats, ShadowTracer, VectorVariant};
+pub use shadow_tracer::{LeafMode, ShadowScratch, ShadowStats, ShadowTracer, TracerOptions, VectorVariant};
 pub use timer::GpuTimer;
+pub use tracer::{DEFAULT_REFERENCE_RAYS, Tracer};

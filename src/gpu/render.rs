@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use super::kernel::{Binding, Checks, Kernel, uniform_buffer};
-use super::shadow_tracer::{LeafMode, ShadowStats, ShadowTracer, VectorVariant};
+use super::shadow_tracer::{LeafMode, ShadowStats, ShadowTracer, Tracer, TracerOptions, VectorVariant};
 use super::{GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer, storage_buffer};
 use crate::filter::FilterParams;
 use crate::frame::{RAY_OFFSET_FRACTION, camera_params};
@@ -96,6 +96,11 @@ pub struct RendererOptions {
     pub variant: Option<VectorVariant>,
     /// How the shadow kernel's leaves use the lanes.
     pub leaf_mode: LeafMode,
+    /// The shadow tracer. [`Tracer::Reference`] frames should be rendered without the
+    /// filter (the reference is the unfiltered yardstick); the renderer does not enforce it.
+    pub tracer: Tracer,
+    /// Count the shadow kernel's work ([`ShadowStats::counters`]).
+    pub counters: bool,
 }
 
 /// A forced (or automatic) vector variant with the default leaf mode, so that
@@ -104,7 +109,7 @@ impl From<Option<VectorVariant>> for RendererOptions {
     fn from(variant: Option<VectorVariant>) -> RendererOptions {
         RendererOptions {
             variant,
-            leaf_mode: LeafMode::default(),
+            ..RendererOptions::default()
         }
     }
 }
@@ -136,7 +141,15 @@ impl Renderer {
                 &[],
                 Checks::Unchecked,
             )?,
-            shadow: ShadowTracer::new(ctx, options.variant, options.leaf_mode)?,
+            shadow: ShadowTracer::with_options(
+                ctx,
+                &TracerOptions {
+                    tracer: options.tracer,
+                    variant: options.variant,
+                    leaf_mode: options.leaf_mode,
+                    counters: options.counters,
+                },
+            )?,
             shade: Kernel::new(
                 ctx,
                 "shade",
@@ -144,7 +157,7 @@ impl Renderer {
                 &[
                     Uniform, ReadOnly, ReadOnly, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
                 ],
-                &[],
+                &[("REFERENCE_RAYS", f64::from(reference_rays(options.tracer)))],
                 Checks::Checked,
             )?,
             filter: Kernel::new(
@@ -161,6 +174,11 @@ impl Renderer {
     /// The shadow pass's vector variant.
     pub fn variant(&self) -> VectorVariant {
         self.shadow.variant
+    }
+
+    /// The shadow tracer.
+    pub fn tracer(&self) -> Tracer {
+        self.shadow.tracer
     }
 
     /// The shadow pass's leaf mode.
@@ -195,7 +213,7 @@ impl Renderer {
             )));
         }
         let pixels = u64::from(w) * u64::from(h);
-        let rw = wgpu::BufferUsages::COPY_SRC;
+        let rw = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
         let gbuffer = empty_storage_buffer(ctx, "G-buffer", pixels * size_of::<GBufferTexel>() as u64, rw)?;
         let masks = empty_storage_buffer(ctx, "shadow masks", pixels * 4, rw)?;
         let values = empty_storage_buffer(ctx, "shaded values", pixels * 16, rw)?;
@@ -204,10 +222,11 @@ impl Renderer {
         let filtered = empty_storage_buffer(ctx, "filtered values", pixels * 16, rw)?;
         let brdf = empty_storage_buffer(ctx, "brdf", pixels * 16, rw)?;
         let status = empty_storage_buffer(ctx, "primary status", 16, rw | wgpu::BufferUsages::COPY_DST)?;
-        let points: Vec<[f32; 4]> = sampling::light_points(&view.light)
-            .iter()
-            .map(|p: &Vec3| p.extend(0.0).to_array())
-            .collect();
+        let points = match self.shadow.tracer {
+            Tracer::Reference { rays } => sampling::reference_light_points(&view.light, rays),
+            _ => sampling::light_points(&view.light),
+        };
+        let points: Vec<[f32; 4]> = points.iter().map(|p: &Vec3| p.extend(0.0).to_array()).collect();
         let light_points = storage_buffer(ctx, "light points", &points, wgpu::BufferUsages::empty())?;
 
         let camera = camera_params(&view.camera, w, h, scene.diagonal * RAY_OFFSET_FRACTION);
@@ -308,6 +327,14 @@ impl Renderer {
             timings: timer.read(ctx)?,
             shadow_stats,
         })
+    }
+}
+
+/// The shade kernel's `REFERENCE_RAYS`: 0 unless the masks are reference counts.
+fn reference_rays(tracer: Tracer) -> u32 {
+    match tracer {
+        Tracer::Reference { rays } => rays,
+        _ => 0,
     }
 }
 

@@ -8,8 +8,10 @@
 //! tile with any amount of work gets the same answer as an uninterrupted one.
 
 use super::kernel::{Binding, Checks, Kernel, uniform_buffer, uniform_buffer_on};
+pub use super::tracer::Tracer;
 use super::{AdapterSummary, GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer};
 use crate::layout::ShadowParams;
+use crate::reference::counters::{Counters, STATUS_WORDS};
 use crate::{Error, Result};
 
 /// 32-bit words of one tile's suspended state (see the kernel).
@@ -117,42 +119,100 @@ impl std::fmt::Display for LeafMode {
 /// What a shadow pass did besides writing masks.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ShadowStats {
+    /// Work counted by the kernel (zero unless built with [`TracerOptions::counters`]).
+    pub counters: Counters,
     /// Dispatches (one per chunk plus one per resume round).
     pub dispatches: u32,
     /// Tile suspensions (tiles that ran out of their iteration budget, summed over rounds).
     pub suspensions: u64,
 }
 
-/// The shadow pass's pipeline for one vector variant and leaf mode.
+/// What a shadow tracer is built with besides the device.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TracerOptions {
+    /// The tracer.
+    pub tracer: Tracer,
+    /// Force a vector variant, or `None` for the adapter's best (vector tracers only).
+    pub variant: Option<VectorVariant>,
+    /// How the MFT kernel's leaves use the lanes.
+    pub leaf_mode: LeafMode,
+    /// Count work as Table 1 does (MFT and packet; see [`Counters`]). Off, the kernels
+    /// are compiled without the counting code.
+    pub counters: bool,
+}
+
+/// The shadow pass's pipeline for one tracer, vector variant and leaf mode.
 #[derive(Debug)]
 pub struct ShadowTracer {
     kernel: Kernel,
-    /// The vector variant this pass runs.
+    /// The tracer this pass runs.
+    pub tracer: Tracer,
+    /// The vector variant this pass runs (meaningless for the per-ray tracers).
     pub variant: VectorVariant,
     /// How its leaves use the lanes.
     pub leaf_mode: LeafMode,
+    /// Whether the kernel counts its work.
+    pub counters: bool,
     vectors_per_workgroup: u32,
 }
 
+/// Invocations per workgroup of the per-ray kernel.
+const PER_RAY_WG_SIZE: u32 = 64;
+/// Workgroups along x of a per-ray dispatch (the rest go along y).
+const PER_RAY_GROUPS_X: u32 = 4096;
+
 impl ShadowTracer {
-    /// Builds the pipeline; `variant` as in [`VectorVariant::choose`], `leaf_mode` sets the
+    /// The MFT pipeline; `variant` as in [`VectorVariant::choose`], `leaf_mode` sets the
     /// kernel's `LEAF_TRANSPOSED` override.
     pub fn new(
         ctx: &GpuContext,
         variant: Option<VectorVariant>,
         leaf_mode: LeafMode,
     ) -> Result<ShadowTracer> {
-        let (variant, vectors_per_workgroup) = VectorVariant::choose(&ctx.info, variant)?;
-        let transposed = f64::from(u8::from(leaf_mode == LeafMode::Transposed));
-        let mut constants: Vec<(&str, f64)> = vec![("LEAF_TRANSPOSED", transposed)];
-        if variant == VectorVariant::Subgroup {
-            constants.push(("VEC16_PER_WG", f64::from(vectors_per_workgroup)));
+        ShadowTracer::with_options(
+            ctx,
+            &TracerOptions {
+                variant,
+                leaf_mode,
+                ..TracerOptions::default()
+            },
+        )
+    }
+
+    /// The pipeline of any tracer.
+    pub fn with_options(ctx: &GpuContext, options: &TracerOptions) -> Result<ShadowTracer> {
+        let tracer = options.tracer;
+        let (variant, vectors_per_workgroup) = if tracer.uses_vector() {
+            VectorVariant::choose(&ctx.info, options.variant)?
+        } else {
+            (VectorVariant::Workgroup, 1)
+        };
+        let counters = f64::from(u8::from(options.counters));
+        let mut constants: Vec<(&str, f64)> = Vec::new();
+        match tracer {
+            Tracer::Mft => {
+                let transposed = f64::from(u8::from(options.leaf_mode == LeafMode::Transposed));
+                constants.push(("LEAF_TRANSPOSED", transposed));
+                constants.push(("COUNTERS", counters));
+            }
+            Tracer::Packet => constants.push(("COUNTERS", counters)),
+            Tracer::PerRay | Tracer::Reference { .. } => {
+                constants.push(("RAYS_PER_PIXEL", f64::from(tracer.rays_per_pixel())));
+            }
         }
+        let aliases: &[(&str, &str)] = if tracer.uses_vector() {
+            if variant == VectorVariant::Subgroup {
+                constants.push(("VEC16_PER_WG", f64::from(vectors_per_workgroup)));
+            }
+            &[("shared/vec16", variant.module())]
+        } else {
+            &[]
+        };
         use Binding::*;
         let kernel = Kernel::new(
             ctx,
-            "shadow_mft",
-            &[("shared/vec16", variant.module())],
+            tracer.kernel(),
+            aliases,
             &[
                 Uniform, ReadOnly, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadWrite, ReadWrite,
             ],
@@ -160,20 +220,42 @@ impl ShadowTracer {
             // Indices: BVH ranges validated by GpuScene::new, stack indices clamped,
             // pixel and state slots bounded by the parameters the host sets here; the
             // transposed leaves index the 256 light points and the workgroup's origins
-            // with lane numbers (< 16) and the vector's index in its workgroup.
+            // with lane numbers (< 16) and the vector's index in its workgroup; the
+            // per-ray kernel indexes the light points below RAYS_PER_PIXEL (or 256).
             Checks::Unchecked,
         )?;
         Ok(ShadowTracer {
             kernel,
+            tracer,
             variant,
-            leaf_mode,
+            leaf_mode: options.leaf_mode,
+            counters: options.counters,
             vectors_per_workgroup,
         })
     }
 
+    /// Light points the kernel reads: 256 (16 interleaved sets) or the reference's own.
+    pub fn light_point_count(&self) -> u32 {
+        match self.tracer {
+            Tracer::Reference { rays } => rays,
+            _ => crate::sampling::SAMPLES as u32,
+        }
+    }
+
+    /// Workgroups of a dispatch over `units` units (tiles or pixels).
+    fn groups(&self, units: u32) -> (u32, u32) {
+        if self.tracer.uses_vector() {
+            (units.div_ceil(self.vectors_per_workgroup), 1)
+        } else {
+            let groups = (units * self.tracer.rays_per_pixel()).div_ceil(PER_RAY_WG_SIZE);
+            (groups.min(PER_RAY_GROUPS_X), groups.div_ceil(PER_RAY_GROUPS_X))
+        }
+    }
+
     /// Traces the shadow masks of a whole image: `gbuffer` (`array<GBufferTexel>`,
-    /// width × height) and `light_points` (256 `vec4`s) in, `masks` (`array<u32>`) out.
-    /// `params` gives the light and image size; its tile fields are set here.
+    /// width × height) and `light_points` ([`ShadowTracer::light_point_count`] `vec4`s)
+    /// in, `masks` (`array<u32>`, `COPY_DST`) out. `params` gives the light and image
+    /// size; its tile fields are set here.
     #[allow(clippy::too_many_arguments)]
     pub fn run(
         &self,
@@ -186,19 +268,24 @@ impl ShadowTracer {
         mut timer: Option<&mut GpuTimer>,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<ShadowStats> {
-        let tiles_x = params.width.div_ceil(4);
-        let tiles_y = params.height.div_ceil(4);
-        let chunk = CHUNK_TILES.min(tiles_x).max(1) as u64 * CHUNK_TILES.min(tiles_y).max(1) as u64;
-        let state = empty_storage_buffer(
-            ctx,
-            "shadow state",
-            chunk * STATE_WORDS * 4,
-            wgpu::BufferUsages::empty(),
-        )?;
+        let unit = self.tracer.unit();
+        let units_x = params.width.div_ceil(unit);
+        let units_y = params.height.div_ceil(unit);
+        let chunk = CHUNK_TILES.min(units_x).max(1) as u64 * CHUNK_TILES.min(units_y).max(1) as u64;
+        let state = if self.tracer.uses_vector() {
+            empty_storage_buffer(
+                ctx,
+                "shadow state",
+                chunk * STATE_WORDS * 4,
+                wgpu::BufferUsages::empty(),
+            )?
+        } else {
+            empty_storage_buffer(ctx, "shadow state (unused)", 4, wgpu::BufferUsages::empty())?
+        };
         let status = empty_storage_buffer(
             ctx,
             "shadow status",
-            16,
+            (STATUS_WORDS * 4) as u64,
             wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         )?;
         let params_buf = uniform_buffer(ctx, "shadow params", params);
@@ -215,18 +302,24 @@ impl ShadowTracer {
                 &status,
             ],
         );
+        if !self.tracer.uses_vector() {
+            // The per-ray kernel ORs (or adds) each ray into its pixel's word.
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            encoder.clear_buffer(masks, 0, None);
+            ctx.queue.submit([encoder.finish()]);
+        }
         let mut stats = ShadowStats::default();
-        let total_tiles = u64::from(tiles_x) * u64::from(tiles_y);
-        let mut tiles_done = 0u64;
-        for ty0 in (0..tiles_y).step_by(CHUNK_TILES as usize) {
-            for tx0 in (0..tiles_x).step_by(CHUNK_TILES as usize) {
+        let total_units = u64::from(units_x) * u64::from(units_y);
+        let mut units_done = 0u64;
+        for ty0 in (0..units_y).step_by(CHUNK_TILES as usize) {
+            for tx0 in (0..units_x).step_by(CHUNK_TILES as usize) {
                 let mut p = *params;
                 p.tile_origin_x = tx0;
                 p.tile_origin_y = ty0;
-                p.tiles_x = CHUNK_TILES.min(tiles_x - tx0);
-                p.tiles_y = CHUNK_TILES.min(tiles_y - ty0);
-                let tiles = p.tiles_x * p.tiles_y;
-                let groups = tiles.div_ceil(self.vectors_per_workgroup);
+                p.tiles_x = CHUNK_TILES.min(units_x - tx0);
+                p.tiles_y = CHUNK_TILES.min(units_y - ty0);
+                let units = p.tiles_x * p.tiles_y;
+                let groups = self.groups(units);
                 for round in 0.. {
                     if round == MAX_ROUNDS {
                         return Err(Error::Gpu(format!(
@@ -239,19 +332,28 @@ impl ShadowTracer {
                     encoder.clear_buffer(&status, 0, None);
                     let writes = timer.as_deref_mut().and_then(|t| t.pass_writes("shadow"));
                     self.kernel
-                        .record(&mut encoder, "shadow/trace", &bind, writes, (groups, 1));
+                        .record(&mut encoder, "shadow/trace", &bind, writes, groups);
                     ctx.queue.submit([encoder.finish()]);
                     stats.dispatches += 1;
-                    let suspended = read_buffer::<u32>(ctx, &status, 0..4)?[0];
-                    if suspended == 0 {
+                    let words = read_buffer::<u32>(ctx, &status, 0..(STATUS_WORDS * 4) as u64)?;
+                    stats.counters += Counters::from_status_words(&words);
+                    if words[0] == 0 {
                         break;
                     }
-                    stats.suspensions += u64::from(suspended);
+                    if !self.tracer.uses_vector() {
+                        return Err(Error::Gpu(format!(
+                            "shadow pass ({}): {} rays ran out of their {} loop iterations \
+                             (BVH too deep or degenerate)",
+                            self.tracer, words[0], params.iteration_budget
+                        )));
+                    }
+                    stats.suspensions += u64::from(words[0]);
                 }
-                tiles_done += u64::from(tiles);
-                progress(tiles_done, total_tiles);
+                units_done += u64::from(units);
+                progress(units_done, total_units);
             }
         }
+        stats.counters.suspensions = stats.suspensions;
         Ok(stats)
     }
 
@@ -275,7 +377,14 @@ impl ShadowTracer {
         params: &ShadowParams,
         resume_rounds: u32,
     ) {
-        let (tiles_x, tiles_y) = (params.width.div_ceil(4), params.height.div_ceil(4));
+        let unit = self.tracer.unit();
+        let (tiles_x, tiles_y) = (params.width.div_ceil(unit), params.height.div_ceil(unit));
+        let resume_rounds = if self.tracer.uses_vector() {
+            resume_rounds
+        } else {
+            encoder.clear_buffer(masks, 0, None);
+            0
+        };
         let mut chunk_index = 0u64;
         for ty0 in (0..tiles_y).step_by(CHUNK_TILES as usize) {
             for tx0 in (0..tiles_x).step_by(CHUNK_TILES as usize) {
@@ -284,7 +393,7 @@ impl ShadowTracer {
                 p.tile_origin_y = ty0;
                 p.tiles_x = CHUNK_TILES.min(tiles_x - tx0);
                 p.tiles_y = CHUNK_TILES.min(tiles_y - ty0);
-                let groups = (p.tiles_x * p.tiles_y).div_ceil(self.vectors_per_workgroup);
+                let groups = self.groups(p.tiles_x * p.tiles_y);
                 for round in 0..=resume_rounds {
                     p.resume = u32::from(round > 0);
                     if round == resume_rounds {
@@ -304,8 +413,7 @@ impl ShadowTracer {
                             &scratch.status,
                         ],
                     );
-                    self.kernel
-                        .record(encoder, "shadow/trace", &bind, None, (groups, 1));
+                    self.kernel.record(encoder, "shadow/trace", &bind, None, groups);
                 }
                 encoder.copy_buffer_to_buffer(&scratch.status, 0, &scratch.unfinished, chunk_index * 4, 4);
                 chunk_index += 1;
@@ -313,7 +421,8 @@ impl ShadowTracer {
         }
     }
 
-    /// Chunks of tiles a `width`×`height` image is traced in (one `unfinished` count each).
+    /// Chunks of tiles a `width`×`height` image is traced in by the MFT tracer (one
+    /// `unfinished` count each; the one-pixel tracers need more, see [`ShadowScratch::new`]).
     pub fn chunks(width: u32, height: u32) -> u64 {
         let (tiles_x, tiles_y) = (width.div_ceil(4), height.div_ceil(4));
         u64::from(tiles_x.div_ceil(CHUNK_TILES)) * u64::from(tiles_y.div_ceil(CHUNK_TILES))
@@ -334,10 +443,10 @@ pub struct ShadowScratch {
 }
 
 impl ShadowScratch {
-    /// Scratch buffers for `width`×`height` images, on `device`.
+    /// Scratch buffers for `width`×`height` images, on `device`, sized for any tracer
+    /// (the one-pixel tracers' chunks are the largest).
     pub fn new(device: &wgpu::Device, width: u32, height: u32) -> ShadowScratch {
-        let tiles = u64::from(CHUNK_TILES.min(width.div_ceil(4)).max(1))
-            * u64::from(CHUNK_TILES.min(height.div_ceil(4)).max(1));
+        let tiles = u64::from(CHUNK_TILES.min(width).max(1)) * u64::from(CHUNK_TILES.min(height).max(1));
         let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -354,12 +463,12 @@ impl ShadowScratch {
             ),
             status: buffer(
                 "shadow status",
-                16,
+                (STATUS_WORDS * 4) as u64,
                 wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             ),
             unfinished: buffer(
                 "shadow unfinished tiles",
-                ShadowTracer::chunks(width, height) * 4,
+                u64::from(width.div_ceil(CHUNK_TILES)) * u64::from(height.div_ceil(CHUNK_TILES)) * 4,
                 wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             ),
         }

@@ -151,30 +151,7 @@ pub fn frustum_test_triangle(f: &Frustum, tri: &BvhTriangle, params: &ShadowPara
     TriangleOutcome::Tested(hits)
 }
 
-/// Work done, counted as the paper's Table 1 counts it.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Counters {
-    /// Loop iterations of the vector (inner nodes + leaf triangles).
-    pub traversal_steps: u64,
-    /// 16-wide box tests (two per inner node visited: both children).
-    pub box_tests: u64,
-    /// Triangles read at leaves (once per vector).
-    pub triangles_accessed: u64,
-    /// (frustum, triangle) pairs that survived culling: 16-ray tests.
-    pub triangle_tests: u64,
-    /// Times a vector ran out of its iteration budget and was resumed.
-    pub suspensions: u64,
-}
-
-impl std::ops::AddAssign for Counters {
-    fn add_assign(&mut self, o: Counters) {
-        self.traversal_steps += o.traversal_steps;
-        self.box_tests += o.box_tests;
-        self.triangles_accessed += o.triangles_accessed;
-        self.triangle_tests += o.triangle_tests;
-        self.suspensions += o.suspensions;
-    }
-}
+pub use super::counters::Counters;
 
 /// The traversal state of one vector: what the GPU kernel saves when it
 /// suspends and reloads when it resumes.
@@ -238,6 +215,7 @@ pub fn trace_tile(
     let root_mask = ballot(&frusta, |_, f| {
         !f.is_done() && frustum_may_hit_box(f, &bvh.nodes[0], params)
     });
+    counters.box_tests += 1;
     let mut running = root_mask != 0;
     st.enter(bvh, 0, root_mask);
     let mut iterations = 0u32;
@@ -253,14 +231,17 @@ pub fn trace_tile(
             let tri = &bvh.triangles[st.cursor as usize];
             st.cursor += 1;
             counters.triangles_accessed += 1;
+            let mut survived = 0;
             for (i, f) in frusta.iter_mut().enumerate() {
                 if st.mask & (1 << i) != 0 && !f.is_done() {
                     if let TriangleOutcome::Tested(hits) = frustum_test_triangle(f, tri, params) {
-                        counters.triangle_tests += 1;
+                        survived += 1;
                         f.occluded |= hits;
                     }
                 }
             }
+            counters.triangle_tests += survived;
+            counters.triangles_after_culling += u64::from(survived > 0);
             if st.cursor == st.end {
                 st.alive = ballot(&frusta, |_, f| !f.is_done());
                 running = st.alive != 0;
@@ -277,6 +258,7 @@ pub fn trace_tile(
             }
         } else {
             let l = bvh.nodes[st.node as usize].first;
+            counters.nodes_visited += 1;
             counters.box_tests += 2;
             let mask = st.mask;
             let wants = |c: u32| {

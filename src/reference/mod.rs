@@ -4,8 +4,10 @@
 //! intersection arithmetic, the per-ray shadow oracle, and the CPU twin of the
 //! multi-frusta shadow kernel. They are the oracles for the GPU kernels.
 
+pub mod counters;
 mod intersect;
 pub mod mft;
+pub mod packet;
 mod parallel;
 pub mod primary;
 pub mod shade;

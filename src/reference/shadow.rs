@@ -142,3 +142,44 @@ pub fn visibility(mask: u32) -> f32 {
         (SAMPLES_PER_SET as u32 - (mask & MASK_FULL).count_ones()) as f32 / SAMPLES_PER_SET as f32
     }
 }
+
+/// The reference tracer's oracle: per pixel, the number of the `points` (the same
+/// for every pixel, see [`crate::sampling::reference_light_points`]) whose ray is
+/// blocked, under the rules of [`initial_mask`] (below the horizon or behind the
+/// light counts as blocked), or [`MASK_SKY`].
+pub fn reference_counts(
+    bvh: &Bvh,
+    gbuffer: &[GBufferTexel],
+    points: &[Vec3],
+    params: &ShadowParams,
+) -> Vec<u32> {
+    let (w, h) = (params.width as usize, params.height as usize);
+    assert_eq!(
+        gbuffer.len(),
+        w * h,
+        "G-buffer size does not match the parameters"
+    );
+    super::parallel::per_pixel(w, h, |p| {
+        let texel = &gbuffer[p];
+        if !texel.is_hit() {
+            return MASK_SKY;
+        }
+        let behind = !faces_light(params, texel.origin);
+        points
+            .iter()
+            .filter(|&&q| {
+                let d = q - texel.origin;
+                behind || texel.geo_normal.dot(d) <= 0.0 || any_hit(bvh, texel.origin, d, params.t_max)
+            })
+            .count() as u32
+    })
+}
+
+/// Visible fraction of a reference tracer's pixel word (1 for sky pixels).
+pub fn reference_visibility(count: u32, rays: u32) -> f32 {
+    if count & MASK_SKY != 0 {
+        1.0
+    } else {
+        1.0 - count as f32 / rays as f32
+    }
+}

@@ -249,3 +249,41 @@ pub fn assert_masks_match_oracle(
     );
     (differing, total, oracle)
 }
+
+/// A scene built in code: one triangle list, each triangle with its material
+/// index, flat normals and one white-ish material per entry of `colors`.
+pub fn scene_from_triangles(triangles: &[([Vec3; 3], u32)], colors: &[[f32; 3]]) -> penumbra::scene::Scene {
+    use penumbra::scene::{Instance, LoadWarnings, Material, SceneTriangle};
+    penumbra::scene::Scene {
+        source: std::path::PathBuf::from("generated-in-test"),
+        triangles: triangles
+            .iter()
+            .map(|&(positions, material)| {
+                let [a, b, c] = positions;
+                let n = (b - a).cross(c - a).normalize_or(Vec3::Y);
+                SceneTriangle {
+                    positions,
+                    normals: [n; 3],
+                    uvs: [glam::Vec2::ZERO; 3],
+                    material,
+                    instance: 0,
+                }
+            })
+            .collect(),
+        materials: colors
+            .iter()
+            .map(|&[r, g, b]| Material {
+                base_color_factor: [r, g, b, 1.0],
+                ..Material::default()
+            })
+            .collect(),
+        images: Vec::new(),
+        instances: vec![Instance {
+            node: 0,
+            name: None,
+            world_from_object: glam::Mat4::IDENTITY,
+        }],
+        camera: None,
+        warnings: LoadWarnings::default(),
+    }
+}

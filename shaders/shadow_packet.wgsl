@@ -1,0 +1,213 @@
+// Packet-traced soft shadows, the paper's baseline: one 16-wide vector per pixel, lane = one of its 16 rays.
+// Dispatched by the shadow tracer (src/gpu/shadow_tracer.rs, Tracer::Packet); CPU twin: src/reference/packet.rs.
+
+#import shared/bvh
+#import shared/frame
+#import shared/intersect
+#import shared/vec16
+
+const STACK_SIZE: u32 = 64u;
+const MASK_SKY: u32 = 0x10000u;
+// Suspended-state slot of a pixel: the MFT kernel's layout (status, node,
+// mask, cursor, end, alive, stack depth, popping, 16 lane words, 64 stack
+// nodes, 64 stack masks); a lane word is 1 when the lane's ray is blocked.
+const STATE_WORDS: u32 = 160u;
+const ST_STATUS: u32 = 0u;
+const ST_LANES: u32 = 8u;
+const ST_STACK_NODE: u32 = 24u;
+const ST_STACK_MASK: u32 = 88u;
+const STATUS_SUSPENDED: u32 = 1u;
+
+// Table 1 counters into status[1..6] (src/reference/counters.rs); off: no cost.
+override COUNTERS: bool = false;
+
+@group(0) @binding(0) var<uniform> params: ShadowParams;
+@group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
+@group(0) @binding(2) var<storage, read> triangles: array<BvhTriangle>;
+@group(0) @binding(3) var<storage, read> gbuffer: array<GBufferTexel>;
+@group(0) @binding(4) var<storage, read> light_points: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read_write> masks: array<u32>;
+@group(0) @binding(6) var<storage, read_write> state: array<u32>;
+// [0]: pixels suspended by this dispatch; [1..6]: counters.
+@group(0) @binding(7) var<storage, read_write> status: array<atomic<u32>>;
+
+var<private> stack_node: array<u32, 64>;
+var<private> stack_mask: array<u32, 64>;
+
+@compute @workgroup_size(VEC16_WG_SIZE)
+fn main(ids: Vec16Ids) {
+    vec16_init(ids);
+    // The dispatch's pixels ("tiles" of one pixel), one vector each.
+    let slot = g_vector;
+    let x = params.tile_origin_x + slot % params.tiles_x;
+    let y = params.tile_origin_y + slot / params.tiles_x;
+    if slot >= params.tiles_x * params.tiles_y {
+        return;  // uniform: per vector
+    }
+    let base = slot * STATE_WORDS;
+    if params.resume != 0u && uniform16(state[base + ST_STATUS]) != STATUS_SUSPENDED {
+        return;
+    }
+    let pixel = y * params.width + x;
+    let texel = gbuffer[pixel];
+    if texel.depth <= 0.0 {
+        if g_lane == 0u {
+            masks[pixel] = MASK_SKY;
+        }
+        return;  // uniform: every lane reads the same texel
+    }
+    let origin = texel.origin;
+    let set_ix = (x & 3u) + 4u * (y & 3u);
+    let dir = light_points[set_ix * 16u + g_lane].xyz - origin;
+    let inv_dir = safe_inverse(dir);
+    let c0 = params.light_corners[0].xyz;
+    // Same rules as reference::shadow::initial_mask.
+    var blocked = dot(params.light_normal, origin - c0) <= 0.0 || dot(texel.geo_normal, dir) <= 0.0;
+
+    var node = 0u;
+    var mask = 0u;
+    var cursor = 0u;
+    var end = 0u;
+    var alive = 0u;
+    var depth = 0u;
+    var popping = 0u;
+    var running = true;
+    var n_nodes = 0u;
+    var n_boxes = 0u;
+    var n_tris = 0u;
+    if params.resume != 0u {
+        node = uniform16(state[base + 1u]);
+        mask = uniform16(state[base + 2u]);
+        cursor = uniform16(state[base + 3u]);
+        end = uniform16(state[base + 4u]);
+        alive = uniform16(state[base + 5u]);
+        depth = uniform16(state[base + 6u]);
+        popping = uniform16(state[base + 7u]);
+        blocked = state[base + ST_LANES + g_lane] != 0u;
+        for (var i = 0u; i < depth; i++) {
+            stack_node[i] = uniform16(state[base + ST_STACK_NODE + i]);
+            stack_mask[i] = uniform16(state[base + ST_STACK_MASK + i]);
+        }
+    } else {
+        alive = ballot16(!blocked);
+        let root = nodes[0];
+        mask = ballot16(!blocked && intersect_box(origin, inv_dir, root, params.t_max) >= 0.0);
+        n_boxes = 1u;
+        running = mask != 0u;
+        if root.count > 0u {
+            cursor = root.first;
+            end = root.first + root.count;
+        }
+    }
+
+    // One step per iteration, as in shadow_mft.wgsl: a leaf triangle, a stack
+    // pop, or an inner node (lavapipe counts every loop pass, so one loop).
+    var iterations = 0u;
+    var suspended = false;
+    loop {
+        if !running {
+            break;
+        }
+        if iterations >= params.iteration_budget {
+            suspended = true;
+            break;
+        }
+        iterations += 1u;
+        var enter = false;
+        if cursor < end {
+            let tri = triangles[cursor];
+            cursor += 1u;
+            n_tris += 1u;
+            let mine = (mask & alive & (1u << g_lane)) != 0u;
+            if mine && intersect_triangle(tri, origin, dir, params.t_max).x > 0.0 {
+                blocked = true;
+            }
+            if cursor == end {
+                alive = ballot16(!blocked);
+                running = alive != 0u;
+                popping = 1u;
+            }
+        } else if popping != 0u {
+            if depth == 0u {
+                running = false;
+            } else {
+                depth -= 1u;
+                let m = stack_mask[depth] & alive;
+                if m != 0u {
+                    node = stack_node[depth];
+                    mask = m;
+                    popping = 0u;
+                    enter = true;
+                }
+            }
+        } else {
+            let l = nodes[node].first;
+            n_nodes += 1u;
+            n_boxes += 2u;
+            let mine = (mask & alive & (1u << g_lane)) != 0u;
+            let ml = ballot16(mine && intersect_box(origin, inv_dir, nodes[l], params.t_max) >= 0.0);
+            let mr = ballot16(mine && intersect_box(origin, inv_dir, nodes[l + 1u], params.t_max) >= 0.0);
+            if ml != 0u && mr != 0u {
+                let right_first = countOneBits(mr) > countOneBits(ml);
+                node = select(l, l + 1u, right_first);
+                mask = select(ml, mr, right_first);
+                // The host checked that the BVH is shallower than the stack.
+                stack_node[min(depth, STACK_SIZE - 1u)] = select(l + 1u, l, right_first);
+                stack_mask[min(depth, STACK_SIZE - 1u)] = select(mr, ml, right_first);
+                depth += 1u;
+                enter = true;
+            } else if ml != 0u {
+                node = l;
+                mask = ml;
+                enter = true;
+            } else if mr != 0u {
+                node = l + 1u;
+                mask = mr;
+                enter = true;
+            } else {
+                popping = 1u;
+            }
+        }
+        if enter {
+            let c = nodes[node];
+            if c.count > 0u {
+                cursor = c.first;
+                end = c.first + c.count;
+            }
+        }
+    }
+    if COUNTERS && g_lane == 0u {
+        // A packet test is one 16-wide test: no culling, every triangle accessed is tested.
+        atomicAdd(&status[1], n_nodes);
+        atomicAdd(&status[2], n_boxes);
+        atomicAdd(&status[3], n_tris);
+        atomicAdd(&status[4], n_tris);
+        atomicAdd(&status[5], n_tris);
+    }
+    if suspended {
+        state[base + ST_LANES + g_lane] = u32(blocked);
+        if g_lane == 0u {
+            state[base + ST_STATUS] = STATUS_SUSPENDED;
+            state[base + 1u] = node;
+            state[base + 2u] = mask;
+            state[base + 3u] = cursor;
+            state[base + 4u] = end;
+            state[base + 5u] = alive;
+            state[base + 6u] = depth;
+            state[base + 7u] = popping;
+            for (var i = 0u; i < depth; i++) {
+                state[base + ST_STACK_NODE + i] = stack_node[i];
+                state[base + ST_STACK_MASK + i] = stack_mask[i];
+            }
+            atomicAdd(&status[0], 1u);
+        }
+        return;
+    }
+    let bits = ballot16(blocked);
+    if g_lane == 0u {
+        masks[pixel] = bits;
+        if params.resume != 0u {
+            state[base + ST_STATUS] = 0u;
+        }
+    }
+}
