@@ -289,6 +289,12 @@ fn check_size(path: &Path, width: u32, height: u32, len: usize) -> Result<()> {
     Ok(())
 }
 
+/// Writes `bytes` to `path` whole or not at all (see [`replace_file`]): for reports
+/// and other small files.
+pub fn write_bytes_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
+    replace_file(path, |f| f.write_all(bytes))
+}
+
 /// Replaces `path` with what `write` puts into a fresh file: written to a
 /// temporary file in the same directory (so the rename stays on one file
 /// system and is atomic), synced, then renamed onto `path`.

@@ -1,5 +1,6 @@
 //! Command-line interface definitions and dispatch.
 
+mod bench;
 mod info;
 mod render;
 mod scene_arg;
@@ -22,6 +23,8 @@ enum Command {
     Info(info::InfoArgs),
     /// Render a scene's soft shadows to PNG or EXR on the GPU and print timings.
     Render(render::RenderArgs),
+    /// Time the shadow tracers against each other and count their work (Table 1).
+    Bench(bench::BenchArgs),
 }
 
 /// BVH build options shared by the commands that build one.
@@ -65,5 +68,6 @@ pub fn run(cli: Cli) -> penumbra::Result<()> {
     match cli.command {
         Command::Info(args) => info::run(&args),
         Command::Render(args) => render::run(&args),
+        Command::Bench(args) => bench::run(&args),
     }
 }

@@ -28,6 +28,17 @@ pub enum VectorArg {
     Workgroup,
 }
 
+impl VectorArg {
+    /// The variant this value forces, `None` for automatic.
+    pub fn forced(self) -> Option<VectorVariant> {
+        match self {
+            VectorArg::Auto => None,
+            VectorArg::Subgroup => Some(VectorVariant::Subgroup),
+            VectorArg::Workgroup => Some(VectorVariant::Workgroup),
+        }
+    }
+}
+
 /// `--leaf-mode` values.
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 pub enum LeafModeArg {
@@ -120,7 +131,7 @@ fn parse_tracer(s: &str) -> std::result::Result<Tracer, String> {
     s.parse()
 }
 
-fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
+pub fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or("expected WIDTHxHEIGHT, e.g. 512x512")?;
@@ -195,11 +206,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         adapter: args.adapter.clone(),
     })?;
     println!("adapter   {}", ctx.info);
-    let forced = match args.vector {
-        VectorArg::Auto => None,
-        VectorArg::Subgroup => Some(VectorVariant::Subgroup),
-        VectorArg::Workgroup => Some(VectorVariant::Workgroup),
-    };
+    let forced = args.vector.forced();
     let renderer = Renderer::new(
         &ctx,
         RendererOptions {

@@ -1,0 +1,455 @@
+//! `penumbra bench`: shadow-pass GPU times of every tracer on a set of scenes,
+//! the speedup of multi-frusta tracing over each baseline taken in the same run,
+//! and the paper's Table-1 counters with their reductions.
+
+use std::path::{Path, PathBuf};
+
+use penumbra::bvh::{Bvh, BvhSettings};
+use penumbra::gpu::{FrameSettings, GpuContext, GpuOptions, GpuScene, Renderer, RendererOptions, Tracer};
+use penumbra::reference::counters::Counters;
+use penumbra::reference::shadow::MASK_SKY;
+use penumbra::scene::Scene;
+use penumbra::view::View;
+use penumbra::{Error, Result, assets};
+use serde::Serialize;
+
+use super::BvhArgs;
+use super::render::{VectorArg, parse_size};
+
+/// Views for the scenes of `../shared/scenes/` (their README's "views that give
+/// interesting soft shadows"), by file name: `(file, view name, view JSON)`.
+const SHARED_VIEWS: &[(&str, &str, &str)] = &[
+    (
+        "sponza.gltf",
+        "sunlit atrium",
+        include_str!("../../assets/views/sponza-atrium.json"),
+    ),
+    (
+        "sponza.gltf",
+        "columns",
+        include_str!("../../assets/views/sponza-columns.json"),
+    ),
+    (
+        "cornell_box.gltf",
+        "luminaire",
+        include_str!("../../assets/views/cornell-box.json"),
+    ),
+    (
+        "stanford-bunny.gltf",
+        "ground",
+        include_str!("../../assets/views/bunny.json"),
+    ),
+    (
+        "duck.gltf",
+        "ground",
+        include_str!("../../assets/views/duck.json"),
+    ),
+    (
+        "2CylinderEngine.glb",
+        "above",
+        include_str!("../../assets/views/engine.json"),
+    ),
+];
+
+/// Arguments of `penumbra bench`.
+#[derive(Debug, clap::Args)]
+pub struct BenchArgs {
+    /// Scenes: glTF files or built-in names. Default: the built-in scenes plus every
+    /// .gltf/.glb under --shared-scenes.
+    #[arg(value_name = "SCENE")]
+    scenes: Vec<PathBuf>,
+    /// Where to look for the shared scenes when no SCENE is given.
+    #[arg(long, default_value = "../shared/scenes")]
+    shared_scenes: PathBuf,
+    /// A view file to use for every scene (default: each scene's known views, else one
+    /// made from its bounds).
+    #[arg(long)]
+    view: Option<PathBuf>,
+    /// Image size WIDTHxHEIGHT.
+    #[arg(long, default_value = "1024x1024", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Shadow rays per pixel (the tracers compared here trace 16).
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(16..=16))]
+    spp: u32,
+    /// Tracers to time, comma-separated; MFT is always included (speedups are over it).
+    #[arg(long, value_delimiter = ',', default_value = "mft,packet,per-ray", value_parser = parse_tracer)]
+    tracers: Vec<Tracer>,
+    /// Timed runs per tracer (after one warm-up run).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+    runs: u32,
+    /// BVH leaf sizes to bench, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "4")]
+    leaf_sizes: Vec<u32>,
+    /// Skip the extra counting run per tracer (counters are gathered in a separate
+    /// run with the counting kernels, so they never slow the timed runs).
+    #[arg(long)]
+    no_counters: bool,
+    /// How the 16-wide vector is built.
+    #[arg(long, value_enum, default_value_t = VectorArg::Auto)]
+    vector: VectorArg,
+    /// GPU adapter: an index or part of its name.
+    #[arg(long)]
+    adapter: Option<String>,
+    /// Also write every figure of the table as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    #[command(flatten)]
+    bvh: BvhArgs,
+}
+
+fn parse_tracer(s: &str) -> std::result::Result<Tracer, String> {
+    match s.parse()? {
+        Tracer::Reference { .. } => Err("bench compares 16-ray tracers: mft, packet, per-ray".into()),
+        t => Ok(t),
+    }
+}
+
+/// One scene and view to bench.
+struct Case {
+    name: String,
+    view_name: String,
+    scene: Scene,
+    view: View,
+}
+
+/// One tracer's figures in one case.
+#[derive(Debug, Serialize)]
+struct TracerResult {
+    tracer: String,
+    shadow_ms: Vec<f64>,
+    shadow_ms_min: f64,
+    shadow_ms_median: f64,
+    mrays_per_s: f64,
+    /// MFT's median speedup over this tracer (1 for MFT itself).
+    mft_speedup: f64,
+    counters: Option<Counters>,
+}
+
+/// One case's figures.
+#[derive(Debug, Serialize)]
+struct CaseResult {
+    scene: String,
+    view: String,
+    triangles: usize,
+    leaf_size: u32,
+    bvh_nodes: usize,
+    width: u32,
+    height: u32,
+    shadow_rays: u64,
+    primary_ms_median: f64,
+    tracers: Vec<TracerResult>,
+    /// Counter reductions of MFT against the packet tracer (packet / MFT).
+    reductions_vs_packet: Option<Reductions>,
+}
+
+/// Packet counts over MFT counts, as Table 1 reports them.
+#[derive(Debug, Serialize)]
+struct Reductions {
+    triangles_accessed: f64,
+    triangles_after_culling: f64,
+    box_tests: f64,
+    triangle_tests: f64,
+}
+
+/// Everything a bench run measured.
+#[derive(Debug, Serialize)]
+struct BenchReport {
+    adapter: String,
+    driver: String,
+    vector: String,
+    runs: u32,
+    cases: Vec<CaseResult>,
+}
+
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let n = s.len();
+    if n % 2 == 1 {
+        s[n / 2]
+    } else {
+        (s[n / 2 - 1] + s[n / 2]) / 2.0
+    }
+}
+
+fn ratio(a: u64, b: u64) -> f64 {
+    if b == 0 { f64::NAN } else { a as f64 / b as f64 }
+}
+
+/// The cases to bench: the scenes named, or the built-ins plus the shared scenes found.
+fn cases(args: &BenchArgs) -> Result<Vec<Case>> {
+    let mut out = Vec::new();
+    let forced_view = args.view.as_deref().map(View::load).transpose()?;
+    let mut push = |name: String, scene: Scene, views: Vec<(String, View)>| {
+        for (view_name, view) in views {
+            let view = forced_view.unwrap_or(view);
+            let mut scene = scene.clone();
+            if let Some(y) = view.ground_y {
+                scene.add_ground_plane(y);
+            }
+            out.push(Case {
+                name: name.clone(),
+                view_name,
+                scene,
+                view,
+            });
+        }
+    };
+    let builtin = |name: &str| assets::embedded_scene(name);
+    let shared_views = |path: &Path, scene: &Scene| -> Result<Vec<(String, View)>> {
+        let file = path.file_name().and_then(|f| f.to_str()).unwrap_or_default();
+        let known: Vec<(String, View)> = SHARED_VIEWS
+            .iter()
+            .filter(|(f, _, _)| *f == file)
+            .map(|(_, name, json)| Ok(((*name).to_owned(), View::from_json(json, Path::new(name))?)))
+            .collect::<Result<_>>()?;
+        Ok(if known.is_empty() {
+            vec![(
+                "default".to_owned(),
+                View::default_for(&scene.bounds(), scene.camera),
+            )]
+        } else {
+            known
+        })
+    };
+    if args.scenes.is_empty() {
+        for s in assets::EMBEDDED_SCENES {
+            let scene = Scene::from_bytes(s.glb, Path::new(s.file_name))?;
+            push(s.name.to_owned(), scene, vec![("built-in".to_owned(), s.view())]);
+        }
+        let mut files: Vec<PathBuf> = std::fs::read_dir(&args.shared_scenes)
+            .into_iter()
+            .flatten()
+            .flatten()
+            .filter(|d| d.path().is_dir())
+            .flat_map(|d| std::fs::read_dir(d.path()).into_iter().flatten().flatten())
+            .map(|e| e.path())
+            .filter(|p| matches!(p.extension().and_then(|e| e.to_str()), Some("gltf" | "glb")))
+            .collect();
+        files.sort();
+        if files.is_empty() {
+            eprintln!(
+                "note: no scenes under {}; benching the built-in scenes only",
+                args.shared_scenes.display()
+            );
+        }
+        for path in files {
+            let scene = Scene::load(&path)?;
+            let views = shared_views(&path, &scene)?;
+            push(path.display().to_string(), scene, views);
+        }
+    } else {
+        for arg in &args.scenes {
+            match (arg.exists(), arg.to_str().and_then(builtin)) {
+                (false, Some(s)) => {
+                    let scene = Scene::from_bytes(s.glb, Path::new(s.file_name))?;
+                    push(s.name.to_owned(), scene, vec![("built-in".to_owned(), s.view())]);
+                }
+                _ => {
+                    let scene = Scene::load(arg)?;
+                    let views = shared_views(arg, &scene)?;
+                    push(arg.display().to_string(), scene, views);
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Runs the benchmark and prints its table.
+pub fn run(args: &BenchArgs) -> Result<()> {
+    let mut tracers = vec![Tracer::Mft];
+    tracers.extend(args.tracers.iter().copied().filter(|&t| t != Tracer::Mft));
+    for &leaf in &args.leaf_sizes {
+        if !(1..=255).contains(&leaf) {
+            return Err(Error::Bvh(format!("--leaf-sizes: {leaf} is not in 1..=255")));
+        }
+    }
+    let cases = cases(args)?;
+    let ctx = GpuContext::new(&GpuOptions {
+        adapter: args.adapter.clone(),
+    })?;
+    let variant = args.vector.forced();
+    let mut renderers = Vec::new();
+    for &tracer in &tracers {
+        let options = |counters| RendererOptions {
+            variant,
+            tracer,
+            counters,
+            ..RendererOptions::default()
+        };
+        let counting = (!args.no_counters && tracer != Tracer::PerRay)
+            .then(|| Renderer::new(&ctx, options(true)))
+            .transpose()?;
+        renderers.push((tracer, Renderer::new(&ctx, options(false))?, counting));
+    }
+    let vector = renderers[0].1.variant().to_string();
+    println!("adapter   {}", ctx.info);
+    println!(
+        "bench     {} case(s) x leaf sizes {:?}, {}x{}, 16 rays/pixel, {} runs after a warm-up, vector {vector}",
+        cases.len(),
+        args.leaf_sizes,
+        args.size.0,
+        args.size.1,
+        args.runs
+    );
+    let (w, h) = args.size;
+    let mut results = Vec::new();
+    let total_steps = cases.len() * args.leaf_sizes.len() * tracers.len();
+    let mut step = 0;
+    for case in &cases {
+        for &leaf_size in &args.leaf_sizes {
+            let settings = BvhSettings {
+                max_leaf_size: leaf_size,
+                ..args.bvh.settings()
+            };
+            let bvh = Bvh::build(&case.scene, &settings)?;
+            let gpu_scene = GpuScene::new(&ctx, &case.scene, &bvh)?;
+            let frame_settings = FrameSettings::new(w, h);
+            let mut tracer_results = Vec::new();
+            let mut primary = Vec::new();
+            let mut rays = 0;
+            for (tracer, renderer, counting) in &renderers {
+                step += 1;
+                let label = format!(
+                    "[{step}/{total_steps}] {} ({}) leaf {leaf_size} {tracer}",
+                    case.name, case.view_name
+                );
+                let mut times = Vec::new();
+                for run in 0..=args.runs {
+                    eprint!(
+                        "\r{label}: {} {:30}",
+                        if run == 0 {
+                            "warm-up".to_owned()
+                        } else {
+                            format!("run {run}/{}", args.runs)
+                        },
+                        ""
+                    );
+                    let frame = renderer.render(&ctx, &gpu_scene, &case.view, &frame_settings)?;
+                    if run > 0 {
+                        times.push(frame.pass_ms("shadow"));
+                        primary.push(frame.pass_ms("primary"));
+                    }
+                    rays = frame.masks.iter().filter(|&&m| m & MASK_SKY == 0).count() as u64 * 16;
+                }
+                let counters = match counting {
+                    Some(r) => {
+                        eprint!("\r{label}: counting {:30}", "");
+                        Some(
+                            r.render(&ctx, &gpu_scene, &case.view, &frame_settings)?
+                                .shadow_stats
+                                .counters,
+                        )
+                    }
+                    None => None,
+                };
+                let med = median(&times);
+                tracer_results.push(TracerResult {
+                    tracer: tracer.to_string(),
+                    shadow_ms_min: times.iter().copied().fold(f64::INFINITY, f64::min),
+                    shadow_ms_median: med,
+                    mrays_per_s: rays as f64 / (med * 1e3),
+                    shadow_ms: times,
+                    mft_speedup: f64::NAN,
+                    counters,
+                });
+            }
+            eprint!("\r{:100}\r", "");
+            let mft_median = tracer_results[0].shadow_ms_median;
+            for t in &mut tracer_results {
+                t.mft_speedup = t.shadow_ms_median / mft_median;
+            }
+            let find = |name: &str| {
+                tracer_results
+                    .iter()
+                    .find(|t| t.tracer == name)
+                    .and_then(|t| t.counters)
+            };
+            let reductions_vs_packet = match (find("mft"), find("packet")) {
+                (Some(m), Some(p)) => Some(Reductions {
+                    triangles_accessed: ratio(p.triangles_accessed, m.triangles_accessed),
+                    triangles_after_culling: ratio(p.triangles_after_culling, m.triangles_after_culling),
+                    box_tests: ratio(p.box_tests, m.box_tests),
+                    triangle_tests: ratio(p.triangle_tests, m.triangle_tests),
+                }),
+                _ => None,
+            };
+            let result = CaseResult {
+                scene: case.name.clone(),
+                view: case.view_name.clone(),
+                triangles: case.scene.triangles.len(),
+                leaf_size,
+                bvh_nodes: bvh.nodes.len(),
+                width: w,
+                height: h,
+                shadow_rays: rays,
+                primary_ms_median: median(&primary),
+                tracers: tracer_results,
+                reductions_vs_packet,
+            };
+            print_case(&result);
+            results.push(result);
+        }
+    }
+    let report = BenchReport {
+        adapter: ctx.info.name.clone(),
+        driver: format!("{} {}", ctx.info.driver, ctx.info.driver_info),
+        vector,
+        runs: args.runs,
+        cases: results,
+    };
+    if let Some(path) = &args.json {
+        let json = serde_json::to_vec_pretty(&report).map_err(|e| Error::Output {
+            path: path.clone(),
+            message: format!("could not encode the report: {e}"),
+        })?;
+        penumbra::output::write_bytes_atomically(path, &json)?;
+        println!("wrote     {}", path.display());
+    }
+    Ok(())
+}
+
+fn print_case(r: &CaseResult) {
+    println!();
+    println!(
+        "{} — {} — {} tris, leaf ≤ {}, {} nodes, {}x{}, {:.2} M shadow rays, primary {:.1} ms",
+        r.scene,
+        r.view,
+        r.triangles,
+        r.leaf_size,
+        r.bvh_nodes,
+        r.width,
+        r.height,
+        r.shadow_rays as f64 / 1e6,
+        r.primary_ms_median
+    );
+    println!(
+        "  {:<8} {:>10} {:>10} {:>8} {:>9} {:>11} {:>11} {:>11} {:>11}",
+        "tracer", "min ms", "median ms", "Mrays/s", "MFT is", "tris", "+culling", "AABB tests", "tri tests"
+    );
+    for t in &r.tracers {
+        let c = |f: fn(&Counters) -> u64| {
+            t.counters
+                .map_or("-".to_owned(), |c| format!("{:.0}K", f(&c) as f64 / 1e3))
+        };
+        println!(
+            "  {:<8} {:>10.1} {:>10.1} {:>8.2} {:>8.2}x {:>11} {:>11} {:>11} {:>11}",
+            t.tracer,
+            t.shadow_ms_min,
+            t.shadow_ms_median,
+            t.mrays_per_s,
+            t.mft_speedup,
+            c(|c| c.triangles_accessed),
+            c(|c| c.triangles_after_culling),
+            c(|c| c.box_tests),
+            c(|c| c.triangle_tests),
+        );
+    }
+    if let Some(red) = &r.reductions_vs_packet {
+        println!(
+            "  packet/MFT: tris {:.2}x, +culling {:.2}x, AABB tests {:.2}x, triangle tests {:.2}x",
+            red.triangles_accessed, red.triangles_after_culling, red.box_tests, red.triangle_tests
+        );
+    }
+}
