@@ -10,8 +10,10 @@ const MASK_FULL: u32 = 0xffffu;
 const MASK_SKY: u32 = 0x10000u;
 // Suspended-state slot of a tile: status, node, mask, cursor, end, alive,
 // stack depth, popping, 16 lane masks, 64 stack nodes, 64 stack masks,
-// the candidate frusta of a transposed leaf (`cand`), 7 words unused.
-const STATE_WORDS: u32 = 160u;
+// the candidate frusta of a transposed leaf (`cand`), 7 words unused, and
+// 16 lane words of `f_shrunk_for`.
+const STATE_WORDS: u32 = 176u;
+const ST_SHRUNK: u32 = 160u;
 const ST_STATUS: u32 = 0u;
 const ST_LANES: u32 = 8u;
 const ST_STACK_NODE: u32 = 24u;
@@ -29,6 +31,12 @@ override LEAF_TRANSPOSED: bool = false;
 override COUNTERS: bool = false;
 // Set in a per-lane test_triangle result when the frustum survived culling.
 const TESTED: u32 = 0x20000u;
+// Frustum shrinking, the paper's "CR": after a leaf that blocked rays of a
+// frustum, its corner rays go through the corners of the light rectangle that
+// holds its still-active samples (reference::mft::Frustum::shrink_to).
+override SHRINK: bool = false;
+const SHRINK_MARGIN: f32 = 0.0009765625;  // 1/1024 of a light edge
+const SHRINK_FLAG: u32 = 0x80000000u;
 
 @group(0) @binding(0) var<uniform> params: ShadowParams;
 @group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
@@ -46,6 +54,11 @@ var<private> f_geo: vec3<f32>;
 var<private> f_side: array<vec3<f32>, 4>;
 var<private> f_dirs: array<vec3<f32>, 16>;
 var<private> f_occluded: u32;
+// The light rectangle this frustum bounds (shrunk or the whole light).
+var<private> f_corner: array<vec3<f32>, 4>;
+// SHRINK_FLAG | the mask the corners were shrunk for; 0: not shrunk.
+var<private> f_shrunk_for: u32;
+var<private> f_initial: u32;
 
 // The vector's traversal stack (the same in every lane).
 var<private> stack_node: array<u32, 64>;
@@ -68,11 +81,12 @@ fn setup_frustum(texel: GBufferTexel, sample_set: u32, inside: bool) {
     f_origin = texel.origin;
     f_geo = texel.geo_normal;
     let o = f_origin;
-    let centre = (corner(0u) + corner(2u)) * 0.5;
-    for (var k = 0u; k < 4u; k++) {
-        let n = cross(corner(k) - o, corner((k + 1u) % 4u) - o);
-        f_side[k] = select(n, -n, dot(n, centre - o) < 0.0);
-    }
+    f_corner[0] = corner(0u);
+    f_corner[1] = corner(1u);
+    f_corner[2] = corner(2u);
+    f_corner[3] = corner(3u);
+    f_shrunk_for = 0u;
+    set_sides();
     var below = 0u;
     for (var j = 0u; j < 16u; j++) {
         let d = light_points[sample_set * 16u + j].xyz - o;
@@ -85,6 +99,65 @@ fn setup_frustum(texel: GBufferTexel, sample_set: u32, inside: bool) {
         f_occluded = MASK_FULL;
     } else {
         f_occluded = below;
+    }
+    f_initial = f_occluded;
+}
+
+// The side planes through the origin and the edges of f_corner (inward normals).
+fn set_sides() {
+    let o = f_origin;
+    let centre = (f_corner[0] + f_corner[2]) * 0.5;
+    for (var k = 0u; k < 4u; k++) {
+        let n = cross(f_corner[k] - o, f_corner[(k + 1u) % 4u] - o);
+        f_side[k] = select(n, -n, dot(n, centre - o) < 0.0);
+    }
+}
+
+var<private> sh_lo: vec2<f32>;
+var<private> sh_hi: vec2<f32>;
+
+// Grows the rectangle by sample j's light coordinates if its ray is not in `blocked`.
+fn stretch(j: u32, blocked: u32, du: vec3<f32>, dv: vec3<f32>) {
+    if (blocked & (1u << j)) == 0u {
+        let q = light_points[g_lane * 16u + j].xyz - corner(0u);
+        let st = vec2<f32>(dot(q, du), dot(q, dv));
+        sh_lo = min(sh_lo, st);
+        sh_hi = max(sh_hi, st);
+    }
+}
+
+fn shrink_to(blocked: u32) {
+    let c0 = corner(0u);
+    let eu = corner(1u) - c0;
+    let ev = corner(3u) - c0;
+    let n = cross(eu, ev);
+    let inv = 1.0 / dot(n, n);
+    let du = cross(ev, n) * inv;
+    let dv = cross(n, eu) * inv;
+    sh_lo = vec2<f32>(1.0);
+    sh_hi = vec2<f32>(0.0);
+    // Unrolled on purpose: every loop iteration counts towards lavapipe's limit.
+    stretch(0u, blocked, du, dv); stretch(1u, blocked, du, dv); stretch(2u, blocked, du, dv);
+    stretch(3u, blocked, du, dv); stretch(4u, blocked, du, dv); stretch(5u, blocked, du, dv);
+    stretch(6u, blocked, du, dv); stretch(7u, blocked, du, dv); stretch(8u, blocked, du, dv);
+    stretch(9u, blocked, du, dv); stretch(10u, blocked, du, dv); stretch(11u, blocked, du, dv);
+    stretch(12u, blocked, du, dv); stretch(13u, blocked, du, dv); stretch(14u, blocked, du, dv);
+    stretch(15u, blocked, du, dv);
+    let lo = max(sh_lo - SHRINK_MARGIN, vec2<f32>(0.0));
+    let hi = min(sh_hi + SHRINK_MARGIN, vec2<f32>(1.0));
+    f_corner[0] = c0 + eu * lo.x + ev * lo.y;
+    f_corner[1] = c0 + eu * hi.x + ev * lo.y;
+    f_corner[2] = c0 + eu * hi.x + ev * hi.y;
+    f_corner[3] = c0 + eu * lo.x + ev * hi.y;
+    set_sides();
+    f_shrunk_for = blocked | SHRINK_FLAG;
+}
+
+// After a leaf: shrink if a ray was blocked since the last shrink (or the start).
+fn shrink_after_leaf() {
+    let last = select(f_initial, f_shrunk_for & MASK_FULL, (f_shrunk_for & SHRINK_FLAG) != 0u);
+    if !is_done() && f_occluded != last {
+        shrink_to(f_occluded);
     }
 }
 
@@ -163,10 +236,10 @@ fn wedge_culls(w: Wedge) -> bool {
         return true;
     }
     let o = f_origin;
-    let k0 = corner(0u) - o;
-    let k1 = corner(1u) - o;
-    let k2 = corner(2u) - o;
-    let k3 = corner(3u) - o;
+    let k0 = f_corner[0] - o;
+    let k1 = f_corner[1] - o;
+    let k2 = f_corner[2] - o;
+    let k3 = f_corner[3] - o;
     return edge_culls(w.m0, w.d, k0, k1, k2, k3) || edge_culls(w.m1, w.d, k0, k1, k2, k3)
         || edge_culls(w.m2, w.d, k0, k1, k2, k3);
 }
@@ -259,6 +332,10 @@ fn main(ids: Vec16Ids) {
             cand_tri = triangles[cursor - 1u];
         }
         f_occluded = state[base + ST_LANES + g_lane];
+        let shrunk_for = state[base + ST_SHRUNK + g_lane];
+        if SHRINK && (shrunk_for & SHRINK_FLAG) != 0u {
+            shrink_to(shrunk_for & MASK_FULL);
+        }
         for (var i = 0u; i < depth; i++) {
             stack_node[i] = uniform16(state[base + ST_STACK_NODE + i]);
             stack_mask[i] = uniform16(state[base + ST_STACK_MASK + i]);
@@ -381,6 +458,9 @@ fn main(ids: Vec16Ids) {
             }
         }
         if in_leaf && cand == 0u && cursor == end {
+            if SHRINK {
+                shrink_after_leaf();
+            }
             alive = ballot16(!is_done());
             running = alive != 0u;
             popping = 1u;
@@ -403,6 +483,7 @@ fn main(ids: Vec16Ids) {
     if suspended {
         // Out of budget: save the state; the next dispatch resumes this tile.
         state[base + ST_LANES + g_lane] = f_occluded;
+        state[base + ST_SHRUNK + g_lane] = f_shrunk_for;
         if g_lane == 0u {
             state[base + ST_STATUS] = STATUS_SUSPENDED;
             state[base + 1u] = node;

@@ -6,8 +6,8 @@ mod support;
 
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::gpu::{
-    FrameSettings, GpuScene, LeafMode, Renderer, RendererOptions, ShadowTracer, empty_storage_buffer,
-    read_buffer, storage_buffer,
+    FrameSettings, GpuScene, LeafMode, Renderer, RendererOptions, ShadowTracer, TracerOptions,
+    empty_storage_buffer, read_buffer, storage_buffer,
 };
 use penumbra::reference::shadow::{ITERATION_BUDGET, shadow_params};
 use penumbra::{assets, sampling};
@@ -95,7 +95,7 @@ fn transposed_leaves_give_the_per_lane_masks_bit_for_bit() {
     }
 }
 
-/// Suspension in the middle of a transposed leaf (the candidate frusta of a triangle are
+/// Suspension in the middle of a transposed leaf (and of shrunk frusta) (the candidate frusta of a triangle are
 /// loop steps too, saved with the tile) resumes to the same masks as an uninterrupted run.
 #[test]
 fn transposed_leaves_resume_after_suspension_with_the_same_masks() {
@@ -120,8 +120,19 @@ fn transposed_leaves_resume_after_suspension_with_the_same_masks() {
     let bytes = u64::from(w * h) * 4;
     let masks = empty_storage_buffer(ctx(), "masks", bytes, wgpu::BufferUsages::COPY_SRC).unwrap();
     for variant in variants() {
-        for leaf_mode in [LeafMode::PerLane, LeafMode::Transposed] {
-            let pass = ShadowTracer::new(ctx(), Some(variant), leaf_mode).unwrap();
+        for (leaf_mode, shrink) in [
+            (LeafMode::PerLane, false),
+            (LeafMode::Transposed, false),
+            (LeafMode::PerLane, true),
+            (LeafMode::Transposed, true),
+        ] {
+            let options = TracerOptions {
+                variant: Some(variant),
+                leaf_mode,
+                shrink,
+                ..TracerOptions::default()
+            };
+            let pass = ShadowTracer::with_options(ctx(), &options).unwrap();
             // An odd budget far below a tile's work: tiles stop at every kind of step.
             for budget in [ITERATION_BUDGET, 97] {
                 let mut params = shadow_params(&view.light, w, h);
@@ -139,13 +150,13 @@ fn transposed_leaves_resume_after_suspension_with_the_same_masks() {
                     )
                     .unwrap();
                 let got: Vec<u32> = read_buffer(ctx(), &masks, 0..bytes).unwrap();
-                eprintln!("{variant} {leaf_mode} budget {budget}: {stats:?}");
+                eprintln!("{variant} {leaf_mode} shrink {shrink} budget {budget}: {stats:?}");
                 if budget < ITERATION_BUDGET {
                     assert!(stats.suspensions > 0, "{variant} {leaf_mode}: nothing suspended");
                 }
                 assert!(
                     got == frame.masks,
-                    "{variant} {leaf_mode} budget {budget}: masks differ from the frame's in {} bits",
+                    "{variant} {leaf_mode} shrink {shrink} budget {budget}: masks differ from the frame's in {} bits",
                     got.iter()
                         .zip(&frame.masks)
                         .map(|(a, b)| (a ^ b).count_ones())

@@ -12,7 +12,7 @@ use penumbra::gpu::{
 };
 use penumbra::layout::GBufferTexel;
 use penumbra::reference::counters::Counters;
-use penumbra::reference::mft::mft_masks;
+use penumbra::reference::mft::{mft_masks, mft_masks_with};
 use penumbra::reference::packet::packet_masks;
 use penumbra::reference::shadow::{ITERATION_BUDGET, MASK_FULL, reference_counts, shadow_params};
 use penumbra::view::{QuadLight, View};
@@ -120,8 +120,10 @@ fn reference_counts_match_the_oracle() {
 }
 
 /// Runs one tracer with counters over a given G-buffer; returns the masks and counters.
+#[allow(clippy::too_many_arguments)]
 fn run_counted(
     tracer: Tracer,
+    shrink: bool,
     variant: VectorVariant,
     leaf_mode: LeafMode,
     gpu_scene: &GpuScene,
@@ -136,6 +138,7 @@ fn run_counted(
             variant: Some(variant),
             leaf_mode,
             counters: true,
+            shrink,
         },
     )
     .unwrap();
@@ -180,16 +183,36 @@ fn counters_equal_the_cpu_twins() {
         let texels = frame.gbuffer.unwrap();
         let params = shadow_params(&view.light, w, h);
         let points = sampling::light_points(&view.light);
-        let (_, mft_twin) = mft_masks(&bvh, &texels, &points, &params, ITERATION_BUDGET);
+        let (mft_plain, mft_twin) = mft_masks(&bvh, &texels, &points, &params, ITERATION_BUDGET);
+        let (_, mft_shrunk) = mft_masks_with(&bvh, &texels, &points, &params, ITERATION_BUDGET, true);
         let (_, packet_twin) = packet_masks(&bvh, &texels, &points, &params, ITERATION_BUDGET);
         for variant in variants() {
-            for (tracer, leaf_mode, twin) in [
-                (Tracer::Mft, LeafMode::PerLane, mft_twin),
-                (Tracer::Mft, LeafMode::Transposed, mft_twin),
-                (Tracer::Packet, LeafMode::PerLane, packet_twin),
+            for (tracer, shrink, leaf_mode, twin) in [
+                (Tracer::Mft, false, LeafMode::PerLane, mft_twin),
+                (Tracer::Mft, false, LeafMode::Transposed, mft_twin),
+                (Tracer::Mft, true, LeafMode::PerLane, mft_shrunk),
+                (Tracer::Mft, true, LeafMode::Transposed, mft_shrunk),
+                (Tracer::Packet, false, LeafMode::PerLane, packet_twin),
             ] {
-                let (_, gpu) = run_counted(tracer, variant, leaf_mode, &gpu_scene, &texels, &view, (w, h));
-                let label = format!("{} {tracer} {variant} {leaf_mode}", s.name);
+                let (masks, gpu) = run_counted(
+                    tracer,
+                    shrink,
+                    variant,
+                    leaf_mode,
+                    &gpu_scene,
+                    &texels,
+                    &view,
+                    (w, h),
+                );
+                let label = format!("{} {tracer} shrink {shrink} {variant} {leaf_mode}", s.name);
+                if tracer == Tracer::Mft {
+                    let bits: u32 = mft_plain
+                        .iter()
+                        .zip(&masks)
+                        .map(|(a, b)| (a ^ b).count_ones())
+                        .sum();
+                    assert!(bits <= 2, "{label}: masks differ from the twin's in {bits} bits");
+                }
                 eprintln!("{label}: GPU {gpu:?}");
                 // Culling decisions are the same arithmetic on both sides; a fused
                 // multiply-add on the GPU could flip one in a million, so allow 0.1 %.
@@ -301,6 +324,7 @@ fn counters_match_hand_counts() {
             for (tracer, expected) in [(Tracer::Mft, mft), (Tracer::Packet, packet)] {
                 let (masks, counters) = run_counted(
                     tracer,
+                    false,
                     variant,
                     LeafMode::PerLane,
                     &gpu_scene,

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::frame::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
-use penumbra::reference::mft::mft_masks;
+use penumbra::reference::mft::{mft_masks, mft_masks_with};
 use penumbra::reference::primary::primary_gbuffer;
 use penumbra::reference::shadow::{ITERATION_BUDGET, shadow_params};
 use penumbra::{assets, sampling, scene::Scene};
@@ -63,4 +63,36 @@ fn suspending_and_resuming_gives_the_same_masks() {
     assert_eq!(c1.suspensions, 0);
     assert!(c2.suspensions > 10, "a budget of 7 iterations must suspend often");
     assert_eq!(whole, pieces);
+}
+
+#[test]
+fn frustum_shrinking_keeps_the_masks_and_saves_triangle_tests() {
+    for s in assets::EMBEDDED_SCENES {
+        let scene = Scene::from_bytes(s.glb, Path::new(s.file_name)).unwrap();
+        let view = s.view();
+        let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
+        let (w, h) = (64, 48);
+        let cam = camera_params(
+            &view.camera,
+            w,
+            h,
+            scene.bounds().diagonal() * RAY_OFFSET_FRACTION,
+        );
+        let gbuffer = primary_gbuffer(&bvh, &ShadingData::new(&scene, &bvh).unwrap(), &cam);
+        let params = shadow_params(&view.light, w, h);
+        let points = sampling::light_points(&view.light);
+        let (plain, c0) = mft_masks_with(&bvh, &gbuffer, &points, &params, ITERATION_BUDGET, false);
+        let (shrunk, c1) = mft_masks_with(&bvh, &gbuffer, &points, &params, ITERATION_BUDGET, true);
+        println!(
+            "{}: triangle tests {} → {} with CR; {c0:?} {c1:?}",
+            s.name, c0.triangle_tests, c1.triangle_tests
+        );
+        assert_eq!(plain, shrunk, "{}: shrinking changed a mask", s.name);
+        assert!(
+            c1.triangle_tests < c0.triangle_tests,
+            "{}: shrinking saved no triangle test",
+            s.name
+        );
+        assert!(c1.nodes_visited <= c0.nodes_visited && c1.box_tests <= c0.box_tests);
+    }
 }

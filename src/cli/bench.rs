@@ -80,6 +80,9 @@ pub struct BenchArgs {
     /// BVH leaf sizes to bench, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "4")]
     leaf_sizes: Vec<u32>,
+    /// Also time MFT with frustum shrinking (the paper's "CR"), as the row `mft+cr`.
+    #[arg(long)]
+    shrink: bool,
     /// Skip the extra counting run per tracer (counters are gathered in a separate
     /// run with the counting kernels, so they never slow the timed runs).
     #[arg(long)]
@@ -258,8 +261,17 @@ fn cases(args: &BenchArgs) -> Result<Vec<Case>> {
 
 /// Runs the benchmark and prints its table.
 pub fn run(args: &BenchArgs) -> Result<()> {
-    let mut tracers = vec![Tracer::Mft];
-    tracers.extend(args.tracers.iter().copied().filter(|&t| t != Tracer::Mft));
+    // (tracer, shrink): MFT first, the speedups are over it.
+    let mut tracers = vec![(Tracer::Mft, false)];
+    if args.shrink {
+        tracers.push((Tracer::Mft, true));
+    }
+    tracers.extend(
+        args.tracers
+            .iter()
+            .filter(|&&t| t != Tracer::Mft)
+            .map(|&t| (t, false)),
+    );
     for &leaf in &args.leaf_sizes {
         if !(1..=255).contains(&leaf) {
             return Err(Error::Bvh(format!("--leaf-sizes: {leaf} is not in 1..=255")));
@@ -271,17 +283,23 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     })?;
     let variant = args.vector.forced();
     let mut renderers = Vec::new();
-    for &tracer in &tracers {
+    for &(tracer, shrink) in &tracers {
         let options = |counters| RendererOptions {
             variant,
             tracer,
             counters,
+            shrink,
             ..RendererOptions::default()
         };
         let counting = (!args.no_counters && tracer != Tracer::PerRay)
             .then(|| Renderer::new(&ctx, options(true)))
             .transpose()?;
-        renderers.push((tracer, Renderer::new(&ctx, options(false))?, counting));
+        let name = if shrink {
+            "mft+cr".to_owned()
+        } else {
+            tracer.to_string()
+        };
+        renderers.push((name, Renderer::new(&ctx, options(false))?, counting));
     }
     let vector = renderers[0].1.variant().to_string();
     println!("adapter   {}", ctx.info);
@@ -346,7 +364,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 };
                 let med = median(&times);
                 tracer_results.push(TracerResult {
-                    tracer: tracer.to_string(),
+                    tracer: tracer.clone(),
                     shadow_ms_min: times.iter().copied().fold(f64::INFINITY, f64::min),
                     shadow_ms_median: med,
                     mrays_per_s: rays as f64 / (med * 1e3),

@@ -120,6 +120,10 @@ pub struct RenderArgs {
     /// How the shadow kernel spends its 16 lanes on a leaf triangle (same image either way).
     #[arg(long, value_enum, default_value_t = LeafMode::default().into())]
     leaf_mode: LeafModeArg,
+    /// MFT: shrink each frustum to its still-active rays after a leaf that blocked some
+    /// (the paper's "CR" frustum shrinking; same image, fewer triangle tests).
+    #[arg(long)]
+    shrink: bool,
     /// GPU adapter: an index or part of its name (else PENUMBRA_ADAPTER, else automatic).
     #[arg(long)]
     adapter: Option<String>,
@@ -214,6 +218,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             leaf_mode: args.leaf_mode.into(),
             tracer,
             counters: false,
+            shrink: args.shrink,
         },
     )?;
     if tracer.uses_vector() {

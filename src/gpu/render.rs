@@ -101,6 +101,8 @@ pub struct RendererOptions {
     pub tracer: Tracer,
     /// Count the shadow kernel's work ([`ShadowStats::counters`]).
     pub counters: bool,
+    /// MFT frustum shrinking ([`TracerOptions::shrink`]).
+    pub shrink: bool,
 }
 
 /// A forced (or automatic) vector variant with the default leaf mode, so that
@@ -148,6 +150,7 @@ impl Renderer {
                     variant: options.variant,
                     leaf_mode: options.leaf_mode,
                     counters: options.counters,
+                    shrink: options.shrink,
                 },
             )?,
             shade: Kernel::new(

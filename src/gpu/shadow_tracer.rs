@@ -14,8 +14,9 @@ use crate::layout::ShadowParams;
 use crate::reference::counters::{Counters, STATUS_WORDS};
 use crate::{Error, Result};
 
-/// 32-bit words of one tile's suspended state (see the kernel).
-const STATE_WORDS: u64 = 160;
+/// 32-bit words of one tile's suspended state (see the kernels; the packet
+/// kernel uses the first 160).
+const STATE_WORDS: u64 = 176;
 /// Tiles per dispatch along each axis: 128×128 tiles = 512×512 pixels, so
 /// the state buffer stays at 10 MiB and no dispatch runs for long.
 const CHUNK_TILES: u32 = 128;
@@ -139,6 +140,10 @@ pub struct TracerOptions {
     /// Count work as Table 1 does (MFT and packet; see [`Counters`]). Off, the kernels
     /// are compiled without the counting code.
     pub counters: bool,
+    /// MFT: shrink frusta after leaves that blocked rays (the paper's "CR", §5.3;
+    /// see [`crate::reference::mft::Frustum::shrink_to`]). Same masks, fewer
+    /// triangle tests, a little more work per leaf.
+    pub shrink: bool,
 }
 
 /// The shadow pass's pipeline for one tracer, vector variant and leaf mode.
@@ -153,6 +158,8 @@ pub struct ShadowTracer {
     pub leaf_mode: LeafMode,
     /// Whether the kernel counts its work.
     pub counters: bool,
+    /// Whether the MFT kernel shrinks its frusta.
+    pub shrink: bool,
     vectors_per_workgroup: u32,
 }
 
@@ -194,6 +201,7 @@ impl ShadowTracer {
                 let transposed = f64::from(u8::from(options.leaf_mode == LeafMode::Transposed));
                 constants.push(("LEAF_TRANSPOSED", transposed));
                 constants.push(("COUNTERS", counters));
+                constants.push(("SHRINK", f64::from(u8::from(options.shrink))));
             }
             Tracer::Packet => constants.push(("COUNTERS", counters)),
             Tracer::PerRay | Tracer::Reference { .. } => {
@@ -230,6 +238,7 @@ impl ShadowTracer {
             variant,
             leaf_mode: options.leaf_mode,
             counters: options.counters,
+            shrink: options.shrink && tracer == Tracer::Mft,
             vectors_per_workgroup,
         })
     }

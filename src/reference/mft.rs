@@ -20,6 +20,21 @@ use crate::sampling::SAMPLES_PER_SET;
 
 /// Depth of the traversal stack; a BVH deeper than this cannot be traced.
 pub const STACK_SIZE: usize = 64;
+/// Widening of a shrunk frustum's light rectangle, in light-edge units: samples
+/// lie at odd multiples of 1/512, so this keeps every active sample 1/1024 of an
+/// edge inside, far above the rounding of the (s, t) arithmetic.
+pub const SHRINK_MARGIN: f32 = 1.0 / 1024.0;
+/// Marks a frustum's `shrunk_for` as set.
+pub const SHRINK_FLAG: u32 = 1 << 31;
+
+/// Inward normals of the planes through `o` and each light edge.
+fn side_planes(o: Vec3, c: &[Vec3; 4]) -> [Vec3; 4] {
+    let centre = (c[0] + c[2]) * 0.5;
+    std::array::from_fn(|k| {
+        let n = (c[k] - o).cross(c[(k + 1) % 4] - o);
+        if n.dot(centre - o) < 0.0 { -n } else { n }
+    })
+}
 
 /// One lane's frustum and its rays.
 #[derive(Clone, Copy, Debug, Default)]
@@ -28,6 +43,15 @@ pub struct Frustum {
     geo_normal: Vec3,
     /// Inward normals of the four side planes through `origin`.
     side: [Vec3; 4],
+    /// The light rectangle the frustum bounds: the light's corners, or after
+    /// shrinking those of the part that holds the still-active samples.
+    corners: [Vec3; 4],
+    /// With [`SHRINK_FLAG`]: the blocked-ray mask `corners` were last shrunk for.
+    shrunk_for: u32,
+    /// The lane's sample set.
+    set: usize,
+    /// The mask before any triangle (rays below the horizon).
+    initial: u32,
     /// Ray directions `light point − origin` of the lane's 16 samples.
     dirs: [Vec3; SAMPLES_PER_SET],
     /// Blocked rays (bits 0..16), or [`MASK_SKY`].
@@ -39,17 +63,57 @@ impl Frustum {
     pub fn new(texel: &GBufferTexel, set: usize, light_points: &[Vec3], params: &ShadowParams) -> Frustum {
         let o = texel.origin;
         let c = light_corners(params);
-        let centre = (c[0] + c[2]) * 0.5;
-        let side = std::array::from_fn(|k| {
-            let n = (c[k] - o).cross(c[(k + 1) % 4] - o);
-            if n.dot(centre - o) < 0.0 { -n } else { n }
-        });
         Frustum {
             origin: o,
             geo_normal: texel.geo_normal,
-            side,
+            side: side_planes(o, &c),
+            corners: c,
+            shrunk_for: 0,
+            set,
             dirs: std::array::from_fn(|j| light_points[set * SAMPLES_PER_SET + j] - o),
             occluded: initial_mask(texel, set, light_points, params),
+            initial: initial_mask(texel, set, light_points, params),
+        }
+    }
+
+    /// Frustum shrinking, the paper's "CR" (§5.3): recomputes the corner rays
+    /// through the corners of the light-plane rectangle (s, t ranges, widened by
+    /// [`SHRINK_MARGIN`]) that holds the samples not yet blocked in `blocked`. Rays
+    /// already blocked need no more tests, so culling against the smaller frustum
+    /// gives the same mask with fewer triangle tests.
+    pub fn shrink_to(&mut self, blocked: u32, light_points: &[Vec3], params: &ShadowParams) {
+        let c = light_corners(params);
+        let (eu, ev) = (c[1] - c[0], c[3] - c[0]);
+        let n = eu.cross(ev);
+        let inv = 1.0 / n.dot(n);
+        let du = ev.cross(n) * inv;
+        let dv = n.cross(eu) * inv;
+        let (mut lo, mut hi) = (glam::Vec2::ONE, glam::Vec2::ZERO);
+        for j in 0..SAMPLES_PER_SET {
+            if blocked & (1 << j) == 0 {
+                let q = light_points[self.set * SAMPLES_PER_SET + j] - c[0];
+                let st = glam::Vec2::new(q.dot(du), q.dot(dv));
+                lo = lo.min(st);
+                hi = hi.max(st);
+            }
+        }
+        lo = (lo - SHRINK_MARGIN).max(glam::Vec2::ZERO);
+        hi = (hi + SHRINK_MARGIN).min(glam::Vec2::ONE);
+        let at = |s: f32, t: f32| c[0] + eu * s + ev * t;
+        self.corners = [at(lo.x, lo.y), at(hi.x, lo.y), at(hi.x, hi.y), at(lo.x, hi.y)];
+        self.side = side_planes(self.origin, &self.corners);
+        self.shrunk_for = blocked | SHRINK_FLAG;
+    }
+
+    /// Shrinks after a leaf if a ray was blocked since the last time (or since the start).
+    fn shrink_after_leaf(&mut self, light_points: &[Vec3], params: &ShadowParams) {
+        let last = if self.shrunk_for & SHRINK_FLAG != 0 {
+            self.shrunk_for & MASK_FULL
+        } else {
+            self.initial
+        };
+        if !self.is_done() && self.occluded != last {
+            self.shrink_to(self.occluded, light_points, params);
         }
     }
 
@@ -121,7 +185,8 @@ pub fn frustum_test_triangle(f: &Frustum, tri: &BvhTriangle, params: &ShadowPara
     }
     // Corner rays: if all four light corners lie strictly outside one edge
     // plane, so does every ray (the paper's corner-ray culling, shared origin).
-    let (k0, k1, k2, k3) = (c[0] - o, c[1] - o, c[2] - o, c[3] - o);
+    let k = f.corners;
+    let (k0, k1, k2, k3) = (k[0] - o, k[1] - o, k[2] - o, k[3] - o);
     let edge_culls = |m: Vec3| {
         let s = [m.dot(k0), m.dot(k1), m.dot(k2), m.dot(k3)];
         if d > 0.0 {
@@ -202,9 +267,22 @@ impl VectorState {
 /// resumes, exactly as the GPU resumes a suspended tile in its next dispatch.
 pub fn trace_tile(
     bvh: &Bvh,
+    frusta: [Frustum; 16],
+    params: &ShadowParams,
+    budget: u32,
+    counters: &mut Counters,
+) -> [u32; 16] {
+    trace_tile_with(bvh, frusta, params, budget, None, counters)
+}
+
+/// [`trace_tile`], with frustum shrinking ([`Frustum::shrink_to`]) after every leaf
+/// when `shrink` gives the light points.
+pub fn trace_tile_with(
+    bvh: &Bvh,
     mut frusta: [Frustum; 16],
     params: &ShadowParams,
     budget: u32,
+    shrink: Option<&[Vec3]>,
     counters: &mut Counters,
 ) -> [u32; 16] {
     let mut st = VectorState {
@@ -243,6 +321,11 @@ pub fn trace_tile(
             counters.triangle_tests += survived;
             counters.triangles_after_culling += u64::from(survived > 0);
             if st.cursor == st.end {
+                if let Some(points) = shrink {
+                    for f in frusta.iter_mut() {
+                        f.shrink_after_leaf(points, params);
+                    }
+                }
                 st.alive = ballot(&frusta, |_, f| !f.is_done());
                 running = st.alive != 0;
                 st.popping = true;
@@ -299,6 +382,18 @@ pub fn mft_masks(
     params: &ShadowParams,
     budget: u32,
 ) -> (Vec<u32>, Counters) {
+    mft_masks_with(bvh, gbuffer, light_points, params, budget, false)
+}
+
+/// [`mft_masks`], with frustum shrinking when `shrink` is set.
+pub fn mft_masks_with(
+    bvh: &Bvh,
+    gbuffer: &[GBufferTexel],
+    light_points: &[Vec3],
+    params: &ShadowParams,
+    budget: u32,
+    shrink: bool,
+) -> (Vec<u32>, Counters) {
     let (w, h) = (params.width as usize, params.height as usize);
     assert_eq!(
         gbuffer.len(),
@@ -333,7 +428,14 @@ pub fn mft_masks(
                             });
                             out.push((
                                 ty * tw + tx,
-                                trace_tile(bvh, frusta, params, budget, &mut counters),
+                                trace_tile_with(
+                                    bvh,
+                                    frusta,
+                                    params,
+                                    budget,
+                                    shrink.then_some(light_points),
+                                    &mut counters,
+                                ),
                             ));
                         }
                     }
