@@ -80,9 +80,10 @@ pub struct BenchArgs {
     /// BVH leaf sizes to bench, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "4")]
     leaf_sizes: Vec<u32>,
-    /// Also time MFT with frustum shrinking (the paper's "CR"), as the row `mft+cr`.
+    /// Also time MFT without frustum shrinking (the paper's "CR", on by default), as the
+    /// row `mft-no-cr`.
     #[arg(long)]
-    shrink: bool,
+    without_cr: bool,
     /// Skip the extra counting run per tracer (counters are gathered in a separate
     /// run with the counting kernels, so they never slow the timed runs).
     #[arg(long)]
@@ -184,8 +185,11 @@ fn cases(args: &BenchArgs) -> Result<Vec<Case>> {
     let mut out = Vec::new();
     let forced_view = args.view.as_deref().map(View::load).transpose()?;
     let mut push = |name: String, scene: Scene, views: Vec<(String, View)>| {
+        let views = match (forced_view, &args.view) {
+            (Some(view), Some(path)) => vec![(path.display().to_string(), view)],
+            _ => views,
+        };
         for (view_name, view) in views {
-            let view = forced_view.unwrap_or(view);
             let mut scene = scene.clone();
             if let Some(y) = view.ground_y {
                 scene.add_ground_plane(y);
@@ -262,9 +266,9 @@ fn cases(args: &BenchArgs) -> Result<Vec<Case>> {
 /// Runs the benchmark and prints its table.
 pub fn run(args: &BenchArgs) -> Result<()> {
     // (tracer, shrink): MFT first, the speedups are over it.
-    let mut tracers = vec![(Tracer::Mft, false)];
-    if args.shrink {
-        tracers.push((Tracer::Mft, true));
+    let mut tracers = vec![(Tracer::Mft, true)];
+    if args.without_cr {
+        tracers.push((Tracer::Mft, false));
     }
     tracers.extend(
         args.tracers
@@ -294,8 +298,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         let counting = (!args.no_counters && tracer != Tracer::PerRay)
             .then(|| Renderer::new(&ctx, options(true)))
             .transpose()?;
-        let name = if shrink {
-            "mft+cr".to_owned()
+        let name = if tracer == Tracer::Mft && !shrink {
+            "mft-no-cr".to_owned()
         } else {
             tracer.to_string()
         };

@@ -120,10 +120,10 @@ pub struct RenderArgs {
     /// How the shadow kernel spends its 16 lanes on a leaf triangle (same image either way).
     #[arg(long, value_enum, default_value_t = LeafMode::default().into())]
     leaf_mode: LeafModeArg,
-    /// MFT: shrink each frustum to its still-active rays after a leaf that blocked some
-    /// (the paper's "CR" frustum shrinking; same image, fewer triangle tests).
+    /// MFT: do not shrink frusta to their still-active rays after a leaf that blocked
+    /// some (the paper's "CR" frustum shrinking, on by default; same image either way).
     #[arg(long)]
-    shrink: bool,
+    no_shrink: bool,
     /// GPU adapter: an index or part of its name (else PENUMBRA_ADAPTER, else automatic).
     #[arg(long)]
     adapter: Option<String>,
@@ -218,7 +218,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             leaf_mode: args.leaf_mode.into(),
             tracer,
             counters: false,
-            shrink: args.shrink,
+            shrink: !args.no_shrink,
         },
     )?;
     if tracer.uses_vector() {

@@ -90,7 +90,7 @@ impl Frame {
 }
 
 /// How the renderer builds its shadow pass.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RendererOptions {
     /// Force a vector variant, or `None` for the adapter's best (see [`VectorVariant::choose`]).
     pub variant: Option<VectorVariant>,
@@ -101,8 +101,21 @@ pub struct RendererOptions {
     pub tracer: Tracer,
     /// Count the shadow kernel's work ([`ShadowStats::counters`]).
     pub counters: bool,
-    /// MFT frustum shrinking ([`TracerOptions::shrink`]).
+    /// MFT frustum shrinking ([`TracerOptions::shrink`]; on by default).
     pub shrink: bool,
+}
+
+impl Default for RendererOptions {
+    fn default() -> RendererOptions {
+        let t = TracerOptions::default();
+        RendererOptions {
+            variant: t.variant,
+            leaf_mode: t.leaf_mode,
+            tracer: t.tracer,
+            counters: t.counters,
+            shrink: t.shrink,
+        }
+    }
 }
 
 /// A forced (or automatic) vector variant with the default leaf mode, so that
