@@ -88,6 +88,21 @@ pub enum Error {
         /// What is wrong, in words.
         message: String,
     },
+    /// A CPU computation (the exact visibility reference) ran out of the time it was given.
+    #[error(
+        "{what}: not finished within the time budget of {budget_s:.1} s ({done} of {total} pixels done); \
+         use a smaller image or scene, or a larger budget"
+    )]
+    TimeBudget {
+        /// What was being computed.
+        what: String,
+        /// The budget, in seconds.
+        budget_s: f64,
+        /// Pixels finished when the budget ran out.
+        done: usize,
+        /// Pixels asked for.
+        total: usize,
+    },
 }
 
 impl Error {

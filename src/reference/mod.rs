@@ -4,9 +4,11 @@
 //! intersection arithmetic, the per-ray shadow oracle, and the CPU twin of the
 //! multi-frusta shadow kernel. They are the oracles for the GPU kernels.
 
+pub mod exact;
 mod intersect;
 pub mod mft;
 mod parallel;
+mod polygon;
 pub mod primary;
 pub mod shade;
 pub mod shadow;
