@@ -1,5 +1,6 @@
 //! Command-line interface definitions and dispatch.
 
+mod compare;
 mod info;
 mod render;
 mod scene_arg;
@@ -22,6 +23,9 @@ enum Command {
     Info(info::InfoArgs),
     /// Render a scene's soft shadows to PNG or EXR on the GPU and print timings.
     Render(render::RenderArgs),
+    /// Compare two images (PNG or EXR): RMSE, mean and max absolute error, PSNR,
+    /// and optionally a false-colour difference image.
+    Compare(compare::CompareArgs),
 }
 
 /// BVH build options shared by the commands that build one.
@@ -65,5 +69,6 @@ pub fn run(cli: Cli) -> penumbra::Result<()> {
     match cli.command {
         Command::Info(args) => info::run(&args),
         Command::Render(args) => render::run(&args),
+        Command::Compare(args) => compare::run(&args),
     }
 }
