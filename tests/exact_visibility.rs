@@ -381,8 +381,7 @@ fn image_budget_and_progress() {
         budget: None,
         on_row: Some(&on_row),
     };
-    let image =
-        exact_visibility_image_with(&bvh, &gbuffer, w as usize, h as usize, &view.light, &options).unwrap();
+    let image = exact_visibility_image_with(&bvh, &gbuffer, w, h, &view.light, &options).unwrap();
     let mut rows = rows.into_inner().unwrap();
     rows.sort();
     assert_eq!(rows, (1..=h as usize).collect::<Vec<_>>());
@@ -394,8 +393,7 @@ fn image_budget_and_progress() {
         budget: Some(std::time::Duration::ZERO),
         on_row: None,
     };
-    let err =
-        exact_visibility_image_with(&bvh, &gbuffer, w as usize, h as usize, &view.light, &none).unwrap_err();
+    let err = exact_visibility_image_with(&bvh, &gbuffer, w, h, &view.light, &none).unwrap_err();
     assert!(matches!(err, Error::TimeBudget { done: 0, .. }), "{err}");
     assert!(err.to_string().contains("time budget"), "{err}");
 }

@@ -29,7 +29,17 @@
 //! triangle crossing the plane through the origin parallel to the light
 //! needs no clipping there and no special case. Every visible convex polygon
 //! is then split by the occluder's lines; the parts outside are kept, the
-//! part inside dropped (Overbeck's beam–triangle split, [`super::polygon`]).
+//! part inside dropped (Overbeck's beam–triangle split, in `polygon.rs`).
+//! The shadows are gathered first and subtracted largest first.
+//!
+//! # Cost
+//!
+//! Proportional to the triangles in the pixel's shadow frustum and to how
+//! finely they cut the light. Measured at 64×64 on a busy 2-core machine
+//! (both cores): about 0.005 ms per pixel on the playground scene and
+//! 0.07–0.09 ms per pixel on Sponza's atrium view, so 512×512 of Sponza takes
+//! about 20 s. [`exact_visibility_image_with`] takes a time budget and reports
+//! progress per row for callers that must bound it.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
@@ -315,8 +325,8 @@ pub struct ExactImageOptions<'a> {
 pub fn exact_visibility_image(
     bvh: &Bvh,
     gbuffer: &[GBufferTexel],
-    width: usize,
-    height: usize,
+    width: u32,
+    height: u32,
     light: &QuadLight,
 ) -> Vec<f32> {
     exact_visibility_image_with(bvh, gbuffer, width, height, light, &ExactImageOptions::default())
@@ -335,11 +345,12 @@ pub fn exact_visibility_image(
 pub fn exact_visibility_image_with(
     bvh: &Bvh,
     gbuffer: &[GBufferTexel],
-    width: usize,
-    height: usize,
+    width: u32,
+    height: u32,
     light: &QuadLight,
     options: &ExactImageOptions,
 ) -> Result<Vec<f32>> {
+    let (width, height) = (width as usize, height as usize);
     assert_eq!(
         gbuffer.len(),
         width * height,
