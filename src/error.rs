@@ -88,6 +88,36 @@ pub enum Error {
         /// What is wrong, in words.
         message: String,
     },
+    /// Two images that must be the same size are not.
+    #[error(
+        "{} is {}×{} but {} is {}×{}: images must be the same size to compare",
+        a.display(), a_size.0, a_size.1, b.display(), b_size.0, b_size.1
+    )]
+    ImageSizeMismatch {
+        /// The first image.
+        a: PathBuf,
+        /// Its width and height.
+        a_size: (u32, u32),
+        /// The second image.
+        b: PathBuf,
+        /// Its width and height.
+        b_size: (u32, u32),
+    },
+    /// A CPU computation (the exact visibility reference) ran out of the time it was given.
+    #[error(
+        "{what}: not finished within the time budget of {budget_s:.1} s ({done} of {total} pixels done); \
+         use a smaller image or scene, or a larger budget"
+    )]
+    TimeBudget {
+        /// What was being computed.
+        what: String,
+        /// The budget, in seconds.
+        budget_s: f64,
+        /// Pixels finished when the budget ran out.
+        done: usize,
+        /// Pixels asked for.
+        total: usize,
+    },
 }
 
 impl Error {

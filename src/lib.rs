@@ -25,6 +25,7 @@ pub mod filter;
 pub mod frame;
 pub mod gpu;
 pub mod layout;
+pub mod metrics;
 pub mod output;
 pub mod reference;
 pub mod sampling;

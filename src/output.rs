@@ -63,6 +63,17 @@ pub struct FloatImage {
     pub pixels: Vec<f32>,
 }
 
+/// A four-channel float image as read from a file, row-major, top row first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbaImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width · height` RGBA values; pixel `(x, y)` is `pixels[y · width + x]`.
+    pub pixels: Vec<[f32; 4]>,
+}
+
 /// How linear radiance becomes 8-bit sRGB for PNG output.
 ///
 /// Per channel: `t = 1 − exp(−exposure · c)`, then the sRGB transfer function,
@@ -184,6 +195,61 @@ pub fn write_float_image(path: &Path, image: &FloatImage) -> Result<()> {
     };
     encoded.map_err(|e| output_error(path, format!("cannot encode the image: {e}")))?;
     replace_file(path, |file| file.write_all(&bytes))
+}
+
+/// Writes display values (already mapped to `[0, 1]`, for example a false-colour
+/// picture) to `path`: `.png` as 8-bit RGB holding `round(255 · clamp(v, 0, 1))`
+/// with no tone map or transfer function (NaN → 0), `.exr` as 32-bit floats
+/// as given.
+///
+/// The file is replaced whole or not at all (see the [module docs](self)).
+///
+/// # Errors
+///
+/// As for [`write_image`].
+pub fn write_display_image(path: &Path, image: &HdrImage) -> Result<()> {
+    let format = format_of(path)?;
+    check_size(path, image.width, image.height, image.pixels.len())?;
+    let mut bytes = Vec::new();
+    let encoded = match format {
+        ImageFormat::Png => {
+            // `as u8` saturates and maps NaN to 0.
+            let rgb: Vec<u8> = image
+                .pixels
+                .iter()
+                .flat_map(|p| p.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8))
+                .collect();
+            PngEncoder::new(&mut bytes).write_image(&rgb, image.width, image.height, ExtendedColorType::Rgb8)
+        }
+        _ => OpenExrEncoder::new(Cursor::new(&mut bytes)).write_image(
+            bytemuck::cast_slice(&image.pixels),
+            image.width,
+            image.height,
+            ExtendedColorType::Rgb32F,
+        ),
+    };
+    encoded.map_err(|e| output_error(path, format!("cannot encode the image: {e}")))?;
+    replace_file(path, |file| file.write_all(&bytes))
+}
+
+/// Reads an RGBA image from `path` (`.exr` or `.png`, by extension): alpha
+/// is 1 where the file has none, and a gray image gives R = G = B.
+///
+/// Values come back as for [`read_hdr_image`] (EXR as stored, PNG samples
+/// divided by the format's maximum, no sRGB decoding).
+///
+/// # Errors
+///
+/// As for [`read_hdr_image`].
+pub fn read_rgba_image(path: &Path) -> Result<RgbaImage> {
+    let image = read_dynamic(path)?.into_rgba32f();
+    let (width, height) = image.dimensions();
+    let pixels = image.pixels().map(|p| p.0).collect();
+    Ok(RgbaImage {
+        width,
+        height,
+        pixels,
+    })
 }
 
 /// Reads an RGB image from `path` (`.exr` or `.png`, by extension).
@@ -530,6 +596,32 @@ mod tests {
         }
         let decoded = image::open(&path).expect("decode with the image crate");
         assert_eq!(decoded.color(), image::ColorType::L16);
+    }
+
+    #[test]
+    fn display_png_holds_the_values_and_reads_back_as_rgba() {
+        let dir = TempDir::new("display_png");
+        let image = HdrImage {
+            width: 2,
+            height: 1,
+            pixels: vec![[0.0, 0.5, 1.0], [2.0, -1.0, f32::NAN]],
+        };
+        let path = dir.join("diff.png");
+        write_display_image(&path, &image).unwrap();
+        let back = read_rgba_image(&path).unwrap();
+        assert_eq!((back.width, back.height), (2, 1));
+        assert_eq!(
+            back.pixels,
+            vec![[0.0, 128.0 / 255.0, 1.0, 1.0], [1.0, 0.0, 0.0, 1.0]]
+        );
+        // A one-channel 16-bit PNG reads back as gray with alpha 1.
+        let gray = dir.join("gray.png");
+        write_float_image(&gray, &sample_float()).unwrap();
+        let back = read_rgba_image(&gray).unwrap();
+        let expected = read_float_image(&gray).unwrap().pixels;
+        for (p, v) in back.pixels.iter().zip(expected) {
+            assert_eq!(*p, [v, v, v, 1.0]);
+        }
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! Command-line interface definitions and dispatch.
 
 mod bench;
+mod compare;
 mod info;
 mod render;
 mod scene_arg;
@@ -25,6 +26,9 @@ enum Command {
     Render(render::RenderArgs),
     /// Time the shadow tracers against each other and count their work (Table 1).
     Bench(bench::BenchArgs),
+    /// Compare two images (PNG or EXR): RMSE, mean and max absolute error, PSNR,
+    /// and optionally a false-colour difference image.
+    Compare(compare::CompareArgs),
 }
 
 /// BVH build options shared by the commands that build one.
@@ -69,5 +73,6 @@ pub fn run(cli: Cli) -> penumbra::Result<()> {
         Command::Info(args) => info::run(&args),
         Command::Render(args) => render::run(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Compare(args) => compare::run(&args),
     }
 }

@@ -5,10 +5,12 @@
 //! multi-frusta shadow kernel. They are the oracles for the GPU kernels.
 
 pub mod counters;
+pub mod exact;
 mod intersect;
 pub mod mft;
 pub mod packet;
 mod parallel;
+mod polygon;
 pub mod primary;
 pub mod shade;
 pub mod shadow;
