@@ -2,7 +2,9 @@
 
 mod bench;
 mod compare;
+mod exact;
 mod info;
+mod quality;
 mod render;
 mod scene_arg;
 
@@ -26,6 +28,8 @@ enum Command {
     Render(render::RenderArgs),
     /// Time the shadow tracers against each other and count their work (Table 1).
     Bench(bench::BenchArgs),
+    /// Error of MFT (filtered and not) and of the reference tracer against exact visibility.
+    Quality(quality::QualityArgs),
     /// Compare two images (PNG or EXR): RMSE, mean and max absolute error, PSNR,
     /// and optionally a false-colour difference image.
     Compare(compare::CompareArgs),
@@ -73,6 +77,7 @@ pub fn run(cli: Cli) -> penumbra::Result<()> {
         Command::Info(args) => info::run(&args),
         Command::Render(args) => render::run(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Quality(args) => quality::run(&args),
         Command::Compare(args) => compare::run(&args),
     }
 }

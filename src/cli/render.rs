@@ -12,10 +12,9 @@ use penumbra::gpu::{
 };
 use penumbra::output::{FloatImage, HdrImage, ToneMap, write_float_image, write_image};
 use penumbra::reference::shadow::MASK_SKY;
-use penumbra::view::View;
 
 use super::BvhArgs;
-use super::scene_arg::{builtin_names, builtin_view, load_scene};
+use super::scene_arg::{builtin_names, load_scene_and_view};
 
 /// `--vector` values.
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -80,22 +79,27 @@ pub struct RenderArgs {
     #[arg(value_name = "SCENE", long_help = format!(
         "glTF 2.0 file (.gltf or .glb), or the name of a built-in scene ({}). \
          Without it, the built-in default scene.", builtin_names()))]
-    scene: Option<PathBuf>,
+    pub scene: Option<PathBuf>,
     /// View file (camera + quad light, JSON; see README). Default: the built-in scene's
     /// view, else the file's camera and a light above the scene.
     #[arg(long)]
-    view: Option<PathBuf>,
+    pub view: Option<PathBuf>,
     /// Image size WIDTHxHEIGHT in pixels (any size; edge tiles are partial).
     #[arg(long, default_value = "512x512", value_parser = parse_size)]
-    size: (u32, u32),
-    /// Shadow tracer: mft (multi-frusta), packet (16-ray packets), per-ray, or reference
-    /// (--spp rays per pixel to the same stratified points, unfiltered).
+    pub size: (u32, u32),
+    /// Shadow tracer: mft (multi-frusta), packet (16-ray packets), per-ray, reference
+    /// (--spp rays per pixel to the same stratified points, unfiltered), or exact (CPU
+    /// beam splitting: the exactly visible fraction of the light; writes the visibility
+    /// image as the output).
     #[arg(long, default_value = "mft", value_parser = parse_tracer)]
-    tracer: Tracer,
+    tracer: TracerArg,
+    /// Exact tracer: give up (with an error, writing nothing) after this many seconds.
+    #[arg(long, default_value_t = 600.0)]
+    pub time_budget: f64,
     /// Shadow rays per pixel: 16 for mft, packet and per-ray (one interleaved set per
     /// pixel); any number up to 65535 for reference (default 256).
     #[arg(long)]
-    spp: Option<u32>,
+    pub spp: Option<u32>,
     /// Skip the 4x4 discontinuity filter.
     #[arg(long)]
     no_filter: bool,
@@ -107,7 +111,7 @@ pub struct RenderArgs {
     normal_tolerance: f32,
     /// Output image; .png (8-bit sRGB, tone-mapped) or .exr (32-bit float linear RGB).
     #[arg(long, short, default_value = "penumbra.png")]
-    output: PathBuf,
+    pub output: PathBuf,
     /// Extra images: `visibility` writes NAME.visibility.exr and NAME.visibility-filtered.exr.
     #[arg(long, value_enum)]
     aov: Option<AovArg>,
@@ -128,11 +132,26 @@ pub struct RenderArgs {
     #[arg(long)]
     adapter: Option<String>,
     #[command(flatten)]
-    bvh: BvhArgs,
+    pub bvh: BvhArgs,
 }
 
-fn parse_tracer(s: &str) -> std::result::Result<Tracer, String> {
-    s.parse()
+/// `--tracer` values: a GPU tracer, or the CPU's exact visibility.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TracerArg {
+    /// A GPU shadow tracer.
+    Gpu(Tracer),
+    /// Exact visibility by beam splitting, on the CPU.
+    Exact,
+}
+
+fn parse_tracer(s: &str) -> std::result::Result<TracerArg, String> {
+    match s {
+        "exact" => Ok(TracerArg::Exact),
+        _ => s
+            .parse()
+            .map(TracerArg::Gpu)
+            .map_err(|e| format!("{e}, or exact")),
+    }
 }
 
 pub fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
@@ -158,7 +177,11 @@ fn aov_path(output: &Path, name: &str) -> PathBuf {
 
 /// Renders and writes the image(s), printing what ran and how long it took.
 pub fn run(args: &RenderArgs) -> Result<()> {
-    let tracer = match (args.tracer, args.spp) {
+    let tracer = match args.tracer {
+        TracerArg::Gpu(tracer) => tracer,
+        TracerArg::Exact => return super::exact::run(args),
+    };
+    let tracer = match (tracer, args.spp) {
         (Tracer::Reference { .. }, Some(rays)) if (1..=65_535).contains(&rays) => Tracer::Reference { rays },
         (Tracer::Reference { .. }, Some(rays)) => {
             return Err(penumbra::Error::Gpu(format!(
@@ -185,18 +208,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         });
     }
     let (width, height) = args.size;
-    let mut scene = load_scene(args.scene.as_deref())?;
-    let view = match (&args.view, builtin_view(args.scene.as_deref())) {
-        (Some(path), _) => View::load(path)?,
-        (None, Some(view)) => view,
-        (None, None) => View::default_for(&scene.bounds(), scene.camera),
-    };
-    if let Some(y) = view.ground_y {
-        scene.add_ground_plane(y);
-    }
-    for w in scene.warnings.messages() {
-        eprintln!("warning: {}: {w}", scene.source.display());
-    }
+    let (scene, view) = load_scene_and_view(args.scene.as_deref(), args.view.as_deref())?;
     let bvh = Bvh::build(&scene, &args.bvh.settings())?;
     println!(
         "scene     {} — {} triangles, BVH {} nodes in {:.1} ms",

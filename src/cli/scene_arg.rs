@@ -2,6 +2,7 @@
 
 use std::path::Path;
 
+use penumbra::view::View;
 use penumbra::{Result, assets, scene::Scene};
 
 /// Loads the scene the argument names: none → the built-in default scene; a
@@ -36,4 +37,23 @@ pub fn builtin_names() -> String {
         .map(|s| s.name)
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// The scene and view a command works on: the scene argument (see [`load_scene`]),
+/// the view file if given, else the built-in scene's view, else one made from the
+/// scene's bounds; with the view's ground plane added and load warnings printed.
+pub fn load_scene_and_view(scene_arg: Option<&Path>, view_arg: Option<&Path>) -> Result<(Scene, View)> {
+    let mut scene = load_scene(scene_arg)?;
+    let view = match (view_arg, builtin_view(scene_arg)) {
+        (Some(path), _) => View::load(path)?,
+        (None, Some(view)) => view,
+        (None, None) => View::default_for(&scene.bounds(), scene.camera),
+    };
+    if let Some(y) = view.ground_y {
+        scene.add_ground_plane(y);
+    }
+    for w in scene.warnings.messages() {
+        eprintln!("warning: {}: {w}", scene.source.display());
+    }
+    Ok((scene, view))
 }

@@ -1,0 +1,219 @@
+//! `penumbra quality`: how close each way of computing visibility gets to the
+//! exact answer (beam splitting) on the same G-buffer: MFT 16 spp with and
+//! without the filter, and the reference tracer at 64 and 256 rays per pixel.
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use penumbra::bvh::Bvh;
+use penumbra::gpu::{FrameSettings, GpuContext, GpuOptions, GpuScene, Renderer, RendererOptions, Tracer};
+use penumbra::metrics::ImageMetrics;
+use penumbra::output::{FloatImage, write_float_image};
+use penumbra::reference::exact::{ExactImageOptions, exact_visibility_image_with};
+use penumbra::reference::shadow::MASK_SKY;
+use penumbra::{Error, Result};
+use serde::Serialize;
+
+use super::BvhArgs;
+use super::render::{VectorArg, parse_size};
+use super::scene_arg::{builtin_names, load_scene_and_view};
+
+/// Arguments of `penumbra quality`.
+#[derive(Debug, clap::Args)]
+pub struct QualityArgs {
+    /// glTF (.gltf/.glb) file, or a built-in scene name; default: the built-in default scene.
+    #[arg(value_name = "SCENE", long_help = format!(
+        "glTF 2.0 file (.gltf or .glb), or the name of a built-in scene ({}). \
+         Without it, the built-in default scene.", builtin_names()))]
+    scene: Option<PathBuf>,
+    /// View file (default: the built-in scene's view, else one made from the scene's bounds).
+    #[arg(long)]
+    view: Option<PathBuf>,
+    /// Image size WIDTHxHEIGHT.
+    #[arg(long, default_value = "256x256", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Filter: neighbours whose depth differs by more than this fraction of the pixel's are ignored.
+    #[arg(long, default_value_t = penumbra::filter::FilterParams::DEFAULT_DEPTH_TOLERANCE)]
+    depth_tolerance: f32,
+    /// Filter: neighbours whose normal has a smaller dot product with the pixel's are ignored.
+    #[arg(long, default_value_t = penumbra::filter::FilterParams::DEFAULT_NORMAL_TOLERANCE)]
+    normal_tolerance: f32,
+    /// Give up on the exact visibility (an error) after this many seconds.
+    #[arg(long, default_value_t = 1800.0)]
+    time_budget: f64,
+    /// Write each method's visibility image as DIR/METHOD.exr, and the exact one.
+    #[arg(long, value_name = "DIR")]
+    images: Option<PathBuf>,
+    /// Write every figure as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// How the 16-wide vector is built.
+    #[arg(long, value_enum, default_value_t = VectorArg::Auto)]
+    vector: VectorArg,
+    /// GPU adapter: an index or part of its name.
+    #[arg(long)]
+    adapter: Option<String>,
+    #[command(flatten)]
+    bvh: BvhArgs,
+}
+
+/// One method's error against exact visibility, over the pixels with geometry.
+#[derive(Debug, Serialize)]
+struct MethodResult {
+    method: String,
+    /// GPU milliseconds of its shadow pass plus its filter (0 for exact: CPU).
+    gpu_ms: f64,
+    rmse: f64,
+    mean_abs: f64,
+    max_abs: f64,
+    psnr: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct QualityReport {
+    scene: String,
+    width: u32,
+    height: u32,
+    adapter: String,
+    /// Pixels with geometry (the only ones compared).
+    pixels: usize,
+    exact_cpu_seconds: f64,
+    methods: Vec<MethodResult>,
+}
+
+/// Renders every method, prints its errors against exact visibility.
+pub fn run(args: &QualityArgs) -> Result<()> {
+    let (w, h) = args.size;
+    let (scene, view) = load_scene_and_view(args.scene.as_deref(), args.view.as_deref())?;
+    let bvh = Bvh::build(&scene, &args.bvh.settings())?;
+    let ctx = GpuContext::new(&GpuOptions {
+        adapter: args.adapter.clone(),
+    })?;
+    println!("adapter   {}", ctx.info);
+    println!(
+        "scene     {} — {} triangles, {w}x{h}",
+        scene.source.display(),
+        scene.triangles.len()
+    );
+    let gpu_scene = GpuScene::new(&ctx, &scene, &bvh)?;
+    let renderer = |tracer| {
+        Renderer::new(
+            &ctx,
+            RendererOptions {
+                variant: args.vector.forced(),
+                tracer,
+                ..RendererOptions::default()
+            },
+        )
+    };
+    let mut settings = FrameSettings::new(w, h);
+    settings.keep_gbuffer = true;
+    settings.filter = Some((args.depth_tolerance, args.normal_tolerance));
+    // (method, visibility per pixel, GPU ms)
+    let mut methods: Vec<(String, Vec<f32>, f64)> = Vec::new();
+    eprint!("rendering MFT 16 spp…\r");
+    let mft = renderer(Tracer::Mft)?;
+    mft.render(&ctx, &gpu_scene, &view, &FrameSettings::new(8, 8))?; // compile before timing
+    let frame = mft.render(&ctx, &gpu_scene, &view, &settings)?;
+    let shadow_ms = frame.pass_ms("shadow");
+    methods.push((
+        "mft-16-filtered".into(),
+        frame.filtered.iter().map(|v| v[3]).collect(),
+        shadow_ms + frame.pass_ms("filter"),
+    ));
+    methods.push((
+        "mft-16".into(),
+        frame.unfiltered.iter().map(|v| v[3]).collect(),
+        shadow_ms,
+    ));
+    let gbuffer = frame.gbuffer.expect("asked for the G-buffer");
+    let hit: Vec<bool> = frame.masks.iter().map(|m| m & MASK_SKY == 0).collect();
+    settings.filter = None;
+    settings.keep_gbuffer = false;
+    for rays in [64, 256] {
+        eprint!("rendering reference {rays} spp…   \r");
+        let r = renderer(Tracer::Reference { rays })?;
+        r.render(&ctx, &gpu_scene, &view, &FrameSettings::new(8, 8))?;
+        let f = r.render(&ctx, &gpu_scene, &view, &settings)?;
+        methods.push((
+            format!("reference-{rays}"),
+            f.unfiltered.iter().map(|v| v[3]).collect(),
+            f.pass_ms("shadow"),
+        ));
+    }
+    let start = Instant::now();
+    let progress = |rows: usize| eprint!("\rexact     {rows}/{h} rows   ");
+    let options = ExactImageOptions {
+        budget: Some(Duration::from_secs_f64(args.time_budget.max(0.0))),
+        on_row: Some(&progress),
+    };
+    let exact = exact_visibility_image_with(&bvh, &gbuffer, w, h, &view.light, &options);
+    eprint!("\r{:40}\r", "");
+    let exact = exact?;
+    let exact_seconds = start.elapsed().as_secs_f64();
+
+    let pick = |v: &[f32]| -> Vec<f32> { v.iter().zip(&hit).filter(|(_, h)| **h).map(|(x, _)| *x).collect() };
+    let exact_hit = pick(&exact);
+    println!(
+        "exact     {exact_seconds:.2} s on the CPU; {} pixels with geometry compared",
+        exact_hit.len()
+    );
+    println!(
+        "  {:<18} {:>10} {:>9} {:>9} {:>9} {:>8}",
+        "method", "GPU ms", "RMSE", "mean |e|", "max |e|", "PSNR dB"
+    );
+    let mut results = Vec::new();
+    for (name, values, ms) in &methods {
+        let m = ImageMetrics::of_values(&pick(values), &exact_hit);
+        println!(
+            "  {name:<18} {ms:>10.1} {:>9.5} {:>9.5} {:>9.4} {:>8.2}",
+            m.rmse, m.mean_abs, m.max_abs, m.psnr
+        );
+        results.push(MethodResult {
+            method: name.clone(),
+            gpu_ms: *ms,
+            rmse: m.rmse,
+            mean_abs: m.mean_abs,
+            max_abs: m.max_abs,
+            psnr: m.psnr,
+        });
+    }
+    if let Some(dir) = &args.images {
+        std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+            path: dir.clone(),
+            source,
+        })?;
+        let images = methods
+            .iter()
+            .map(|(n, v, _)| (n.as_str(), v))
+            .chain([("exact", &exact)]);
+        for (name, values) in images {
+            let path = dir.join(format!("{name}.exr"));
+            let image = FloatImage {
+                width: w,
+                height: h,
+                pixels: values.clone(),
+            };
+            write_float_image(&path, &image)?;
+        }
+        println!("wrote     {}/{{method}}.exr", dir.display());
+    }
+    if let Some(path) = &args.json {
+        let report = QualityReport {
+            scene: scene.source.display().to_string(),
+            width: w,
+            height: h,
+            adapter: ctx.info.name.clone(),
+            pixels: exact_hit.len(),
+            exact_cpu_seconds: exact_seconds,
+            methods: results,
+        };
+        let json = serde_json::to_vec_pretty(&report).map_err(|e| Error::Output {
+            path: path.clone(),
+            message: format!("could not encode the report: {e}"),
+        })?;
+        penumbra::output::write_bytes_atomically(path, &json)?;
+        println!("wrote     {}", path.display());
+    }
+    Ok(())
+}

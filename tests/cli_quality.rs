@@ -1,0 +1,141 @@
+//! `penumbra quality`, `penumbra render --tracer exact|packet|per-ray|reference` and
+//! `penumbra bench` end to end on the generated scenes at small sizes (CI runs these).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use penumbra::output::read_float_image;
+
+fn out_dir(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("cli_quality")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn penumbra(dir: &Path, args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn quality_reports_every_method_on_the_generated_scenes() {
+    for scene in ["playground", "lattice"] {
+        let dir = out_dir(scene);
+        let (ok, stdout, stderr) = penumbra(&dir, &["quality", scene, "--size", "48x40", "--json", "q.json"]);
+        assert!(ok, "quality {scene} failed:\n{stdout}\n{stderr}");
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("q.json")).unwrap()).unwrap();
+        let methods = report["methods"].as_array().unwrap();
+        let names: Vec<&str> = methods.iter().map(|m| m["method"].as_str().unwrap()).collect();
+        assert_eq!(
+            names,
+            ["mft-16-filtered", "mft-16", "reference-64", "reference-256"]
+        );
+        let rmse = |i: usize| methods[i]["rmse"].as_f64().unwrap();
+        for (i, name) in names.iter().enumerate() {
+            assert!(
+                rmse(i).is_finite() && rmse(i) > 0.0 && rmse(i) < 0.5,
+                "{scene} {name}: RMSE {}",
+                rmse(i)
+            );
+        }
+        // More rays, less error: a sanity check on the yardstick itself.
+        assert!(rmse(3) < rmse(2) && rmse(2) < rmse(1), "{scene}: {stdout}");
+        assert!(report["pixels"].as_u64().unwrap() > 48 * 40 / 2);
+    }
+}
+
+#[test]
+fn render_writes_every_tracer() {
+    let dir = out_dir("tracers");
+    for tracer in ["exact", "packet", "per-ray", "reference:32"] {
+        let file = format!("{}.exr", tracer.replace(':', "-"));
+        let (ok, stdout, stderr) = penumbra(
+            &dir,
+            &["render", "--tracer", tracer, "--size", "40x30", "-o", &file],
+        );
+        assert!(ok, "render --tracer {tracer} failed:\n{stdout}\n{stderr}");
+        assert_eq!(
+            read_float_image(&dir.join(&file)).unwrap().pixels.len(),
+            40 * 30,
+            "{tracer}"
+        );
+    }
+    let (ok, _, stderr) = penumbra(
+        &dir,
+        &["render", "--tracer", "exact", "--spp", "16", "-o", "x.exr"],
+    );
+    assert!(!ok && stderr.contains("--spp"), "{stderr}");
+    let (ok, _, stderr) = penumbra(&dir, &["render", "--tracer", "mft", "--spp", "64", "-o", "x.exr"]);
+    assert!(!ok && stderr.contains("exactly 16 rays"), "{stderr}");
+    let (ok, _, stderr) = penumbra(&dir, &["render", "--tracer", "frusta"]);
+    assert!(!ok && stderr.contains("unknown tracer"), "{stderr}");
+    let (ok, _, stderr) = penumbra(
+        &dir,
+        &[
+            "render",
+            "lattice",
+            "--tracer",
+            "exact",
+            "--time-budget",
+            "0",
+            "-o",
+            "late.exr",
+        ],
+    );
+    assert!(!ok && stderr.contains("time budget"), "{stderr}");
+    assert!(
+        !dir.join("late.exr").exists(),
+        "a render out of time writes nothing"
+    );
+}
+
+#[test]
+fn bench_prints_the_table_and_its_json() {
+    let dir = out_dir("bench");
+    let (ok, stdout, stderr) = penumbra(
+        &dir,
+        &[
+            "bench",
+            "playground",
+            "--size",
+            "32x32",
+            "--runs",
+            "2",
+            "--without-cr",
+            "--json",
+            "b.json",
+        ],
+    );
+    assert!(ok, "bench failed:\n{stdout}\n{stderr}");
+    for row in ["mft ", "mft-no-cr", "packet", "per-ray", "packet/MFT"] {
+        assert!(stdout.contains(row), "no {row} in:\n{stdout}");
+    }
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("b.json")).unwrap()).unwrap();
+    let tracers = report["cases"][0]["tracers"].as_array().unwrap();
+    assert_eq!(tracers.len(), 4);
+    for t in tracers {
+        assert_eq!(t["shadow_ms"].as_array().unwrap().len(), 2);
+        assert!(t["shadow_ms_median"].as_f64().unwrap() > 0.0);
+    }
+    let mft = &tracers[0]["counters"];
+    assert!(mft["box_tests"].as_u64().unwrap() > 0 && mft["triangle_tests"].as_u64().unwrap() > 0);
+    assert!(
+        report["cases"][0]["reductions_vs_packet"]["box_tests"]
+            .as_f64()
+            .unwrap()
+            > 1.0
+    );
+}
