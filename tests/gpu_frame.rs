@@ -8,7 +8,6 @@
 
 mod support;
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use glam::{Vec2, Vec3};
@@ -20,54 +19,17 @@ use penumbra::layout::{GBufferTexel, ShadowParams};
 use penumbra::reference::mft::{Counters, Frustum, mft_masks, trace_tile};
 use penumbra::reference::primary::primary_gbuffer;
 use penumbra::reference::shadow::{ITERATION_BUDGET, MASK_FULL, MASK_SKY, per_ray_masks, shadow_params};
-use penumbra::scene::{Instance, LoadWarnings, Material, Scene, SceneTriangle};
+use penumbra::scene::Scene;
 use penumbra::view::{Camera, QuadLight, View};
 use penumbra::{assets, sampling};
 use support::gpu::{ctx, embedded, variants};
-use support::{Rng, compare_masks};
+use support::{Rng, compare_masks, scene_from_triangles};
 
 /// lavapipe (Mesa 22.3) ends every loop of an invocation after this many
 /// iterations, counted across all its loops. Measured here: a loop nested in
 /// another costs one more iteration each time the outer body reaches it, even
 /// in a branch no lane takes, so a loop with a nested loop gets only ~32,767.
 const LAVAPIPE_LOOP_LIMIT: u64 = 65_535;
-
-/// A scene built in code: one triangle list, each triangle with its material
-/// index, flat normals and one white-ish material per entry of `colors`.
-fn scene_from_triangles(triangles: &[([Vec3; 3], u32)], colors: &[[f32; 3]]) -> Scene {
-    Scene {
-        source: PathBuf::from("generated-in-test"),
-        triangles: triangles
-            .iter()
-            .map(|&(positions, material)| {
-                let [a, b, c] = positions;
-                let n = (b - a).cross(c - a).normalize_or(Vec3::Y);
-                SceneTriangle {
-                    positions,
-                    normals: [n; 3],
-                    uvs: [Vec2::ZERO; 3],
-                    material,
-                    instance: 0,
-                }
-            })
-            .collect(),
-        materials: colors
-            .iter()
-            .map(|&[r, g, b]| Material {
-                base_color_factor: [r, g, b, 1.0],
-                ..Material::default()
-            })
-            .collect(),
-        images: Vec::new(),
-        instances: vec![Instance {
-            node: 0,
-            name: None,
-            world_from_object: glam::Mat4::IDENTITY,
-        }],
-        camera: None,
-        warnings: LoadWarnings::default(),
-    }
-}
 
 /// The horizontal square `[-half, half]²` at height `y`, facing +y, as two triangles.
 fn horizontal_square(y: f32, half: f32, material: u32) -> [([Vec3; 3], u32); 2] {
