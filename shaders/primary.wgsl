@@ -1,47 +1,21 @@
 // Primary visibility: one closest-hit camera ray per pixel, written as a G-buffer texel.
-// Dispatched by the renderer (src/gpu/render.rs); CPU twin: src/reference/primary.rs.
+// Dispatched by the primary pass (src/gpu/primary_pass.rs, PrimaryTracer::PerRay); CPU twin: src/reference/primary.rs.
 
 #import shared/bvh
+#import shared/counters
 #import shared/frame
 #import shared/intersect
+#import shared/primary
 
 // Pushes both children of a node: the stack holds at most depth + 1 entries.
 const STACK_SIZE: u32 = 64u;
-// Below lavapipe's 65,535 loop iterations per invocation (all loops counted).
-const ITERATION_LIMIT: u32 = 60000u;
-
-@group(0) @binding(0) var<uniform> camera: CameraParams;
-@group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
-@group(0) @binding(2) var<storage, read> triangles: array<BvhTriangle>;
-@group(0) @binding(3) var<storage, read> shading: array<ShadingTriangle>;
-@group(0) @binding(4) var<storage, read> materials: array<GpuMaterial>;
-@group(0) @binding(5) var<storage, read_write> gbuffer: array<GBufferTexel>;
-// [0]: pixels whose ray ran out of iterations (the host reports an error).
-@group(0) @binding(6) var<storage, read_write> status: array<atomic<u32>>;
-@group(0) @binding(7) var<storage, read> textures: array<GpuTexture>;
-@group(0) @binding(8) var<storage, read> texels: array<vec4<f32>>;
-
-// Base colour factor times the nearest texel (coordinates wrap); twin of ShadingData::albedo.
-fn albedo(material: GpuMaterial, uv: vec2<f32>) -> vec3<f32> {
-    if material.texture >= arrayLength(&textures) {
-        return material.base_color;
-    }
-    let t = textures[material.texture];
-    let u = uv.x - floor(uv.x);
-    let v = uv.y - floor(uv.y);
-    let x = min(u32(u * f32(t.width)), t.width - 1u);
-    let y = min(u32(v * f32(t.height)), t.height - 1u);
-    return material.base_color * texels[t.offset + y * t.width + x].xyz;
-}
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= camera.width || gid.y >= camera.height {
         return;
     }
-    let sx = 2.0 * (f32(gid.x) + 0.5) / f32(camera.width) - 1.0;
-    let sy = 1.0 - 2.0 * (f32(gid.y) + 0.5) / f32(camera.height);
-    let dir = camera.forward + sx * camera.right + sy * camera.up;
+    let dir = pixel_dir(gid.x, gid.y);
     let origin = camera.eye;
     let inv_dir = safe_inverse(dir);
 
@@ -52,6 +26,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var depth = 0u;
     var cursor = 0u;  // next triangle of the current leaf
     var end = 0u;     // end of the current leaf's triangles
+    // Work counters (shared/counters); dead code unless COUNTERS.
+    var n_steps = 0u;
+    var n_box_tests = 1u;  // the root's
+    var n_triangles = 0u;
     if intersect_box(origin, inv_dir, nodes[0], t_best) >= 0.0 {
         stack[0] = 0u;
         depth = 1u;
@@ -65,12 +43,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             break;
         }
         iterations += 1u;
-        if iterations > ITERATION_LIMIT {
-            atomicAdd(&status[0], 1u);
+        if iterations > ITERATION_BUDGET {
+            atomicAdd(&status[WORD_STATUS], 1u);
             break;
         }
         if cursor < end {
             let h = intersect_triangle(triangles[cursor], origin, dir, t_best);
+            n_triangles += 1u;
             if h.x >= 0.0 {
                 t_best = h.x;
                 best = h;
@@ -86,6 +65,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             end = node.first + node.count;
             continue;
         }
+        n_steps += 1u;
+        n_box_tests += 2u;
         let l = node.first;
         let tl = intersect_box(origin, inv_dir, nodes[l], t_best);
         let tr = intersect_box(origin, inv_dir, nodes[l + 1u], t_best);
@@ -103,33 +84,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             depth += 1u;
         }
     }
-
-    var texel: GBufferTexel;
-    texel.triangle = 0xffffffffu;
-    if best_tri != 0xffffffffu {
-        let tri = triangles[best_tri];
-        let sh = shading[best_tri];
-        var geo = normalize(cross(tri.e1, tri.e2));
-        let w = 1.0 - best.y - best.z;
-        let interpolated = sh.n0 * w + sh.n1 * best.y + sh.n2 * best.z;
-        var normal = geo;
-        if dot(interpolated, interpolated) > 0.0 {
-            normal = normalize(interpolated);
-        }
-        if dot(geo, dir) > 0.0 {
-            geo = -geo;
-        }
-        if dot(normal, dir) > 0.0 {
-            normal = -normal;
-        }
-        let point = origin + dir * best.x;
-        let uv = sh.uv0 * w + sh.uv1 * best.y + sh.uv2 * best.z;
-        texel.origin = point + geo * camera.ray_offset;
-        texel.depth = best.x * length(dir);
-        texel.normal = normal;
-        texel.triangle = best_tri;
-        texel.geo_normal = geo;
-        texel.albedo = albedo(materials[sh.material], uv);
+    if COUNTERS {
+        // No culling here: every triangle fetched is tested.
+        atomicAdd(&status[WORD_TRAVERSAL_STEPS], n_steps);
+        atomicAdd(&status[WORD_BOX_TESTS], n_box_tests);
+        atomicAdd(&status[WORD_TRIANGLES_ACCESSED], n_triangles);
+        atomicAdd(&status[WORD_TRIANGLES_AFTER_CULLING], n_triangles);
+        atomicAdd(&status[WORD_TRIANGLE_TESTS], n_triangles);
     }
-    gbuffer[gid.y * camera.width + gid.x] = texel;
+    gbuffer[gid.y * camera.width + gid.x] = gbuffer_texel(best_tri, best, dir);
 }

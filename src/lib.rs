@@ -20,6 +20,7 @@
 
 pub mod assets;
 pub mod bvh;
+pub mod counters;
 mod error;
 pub mod filter;
 pub mod frame;

@@ -28,16 +28,19 @@ pub static SOURCES: &[(&str, &str)] = &[
     ("filter", include_str!("../shaders/filter.wgsl")),
     ("gpu_selftest", include_str!("../shaders/gpu_selftest.wgsl")),
     ("primary", include_str!("../shaders/primary.wgsl")),
+    ("primary_mft", include_str!("../shaders/primary_mft.wgsl")),
     ("shade", include_str!("../shaders/shade.wgsl")),
     ("shadow_mft", include_str!("../shaders/shadow_mft.wgsl")),
     ("shadow_packet", include_str!("../shaders/shadow_packet.wgsl")),
     ("shadow_per_ray", include_str!("../shaders/shadow_per_ray.wgsl")),
     ("shared/bvh", include_str!("../shaders/shared/bvh.wgsl")),
+    ("shared/counters", include_str!("../shaders/shared/counters.wgsl")),
     ("shared/frame", include_str!("../shaders/shared/frame.wgsl")),
     (
         "shared/intersect",
         include_str!("../shaders/shared/intersect.wgsl"),
     ),
+    ("shared/primary", include_str!("../shaders/shared/primary.wgsl")),
     (
         "shared/vec16_subgroup",
         include_str!("../shaders/shared/vec16_subgroup.wgsl"),
@@ -57,6 +60,13 @@ pub const KERNELS: &[(&str, &[Aliases<'static>])] = &[
     ("filter", &[&[]]),
     ("gpu_selftest", &[&[]]),
     ("primary", &[&[]]),
+    (
+        "primary_mft",
+        &[
+            &[("shared/vec16", "shared/vec16_subgroup")],
+            &[("shared/vec16", "shared/vec16_workgroup")],
+        ],
+    ),
     ("shade", &[&[]]),
     (
         "shadow_mft",
@@ -370,6 +380,33 @@ mod tests {
                 Some(&naga::TypeInner::Scalar(naga::Scalar::BOOL)),
                 "shadow_mft with {aliases:?}: `override LEAF_TRANSPOSED: bool`"
             );
+        }
+    }
+
+    #[test]
+    fn primary_kernels_have_the_overrides_the_pass_sets() {
+        // PrimaryPass sets these by name; a rename would only fail at pipeline creation.
+        for kernel in ["primary", "primary_mft"] {
+            for &aliases in KERNELS.iter().find(|(k, _)| *k == kernel).unwrap().1 {
+                let module = validate(&assemble(kernel, aliases).unwrap()).unwrap();
+                let ty = |name: &str| {
+                    module
+                        .overrides
+                        .iter()
+                        .find(|(_, o)| o.name.as_deref() == Some(name))
+                        .map(|(_, o)| module.types[o.ty].inner.clone())
+                };
+                assert_eq!(
+                    ty("COUNTERS"),
+                    Some(naga::TypeInner::Scalar(naga::Scalar::BOOL)),
+                    "{kernel} with {aliases:?}: `override COUNTERS: bool`"
+                );
+                assert_eq!(
+                    ty("ITERATION_BUDGET"),
+                    Some(naga::TypeInner::Scalar(naga::Scalar::U32)),
+                    "{kernel} with {aliases:?}: `override ITERATION_BUDGET: u32`"
+                );
+            }
         }
     }
 

@@ -9,6 +9,7 @@
 mod buffers;
 mod context;
 pub mod kernel;
+pub mod primary_pass;
 pub mod render;
 mod scene_buffers;
 pub mod shadow_tracer;
@@ -17,6 +18,7 @@ mod tracer;
 
 pub use buffers::{empty_storage_buffer, read_buffer, storage_buffer};
 pub use context::{ADAPTER_ENV, AdapterSummary, GpuContext, GpuOptions};
+pub use primary_pass::{PrimaryPass, PrimaryStatus, PrimaryTracer};
 pub use render::{Frame, FrameSettings, Renderer, RendererOptions};
 pub use scene_buffers::{GpuScene, validate_for_gpu};
 pub use shadow_tracer::{LeafMode, ShadowScratch, ShadowStats, ShadowTracer, TracerOptions, VectorVariant};

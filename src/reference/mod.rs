@@ -2,7 +2,7 @@
 //! BVH, reading exactly the data the GPU reads ([`BvhNode`](crate::layout::BvhNode)s
 //! and [`BvhTriangle`](crate::layout::BvhTriangle)s in leaf order) with the same
 //! intersection arithmetic, the per-ray shadow oracle, and the CPU twin of the
-//! multi-frusta shadow kernel. They are the oracles for the GPU kernels.
+//! multi-frusta shadow kernel and of the primary kernels. They are the oracles for the GPU kernels.
 
 pub mod counters;
 pub mod exact;
@@ -12,9 +12,10 @@ pub mod packet;
 mod parallel;
 mod polygon;
 pub mod primary;
+pub mod primary_mft;
 pub mod shade;
 pub mod shadow;
 mod traverse;
 
 pub use intersect::{RayBox, intersect_box, intersect_triangle, safe_inverse};
-pub use traverse::{Hit, any_hit, closest_hit};
+pub use traverse::{Hit, any_hit, closest_hit, closest_hit_counted};

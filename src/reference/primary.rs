@@ -1,19 +1,29 @@
-//! CPU twin of the primary pass (`shaders/primary.wgsl`): one closest-hit
-//! camera ray per pixel, written as a G-buffer texel.
+//! CPU twin of the per-ray primary kernel (`shaders/primary.wgsl`): one
+//! closest-hit camera ray per pixel, written as a G-buffer texel.
 
+use glam::Vec3;
+
+use super::traverse::closest_hit_counted;
 use crate::bvh::Bvh;
+use crate::counters::TraceCounters;
 use crate::frame::{ShadingData, camera_ray};
 use crate::layout::{CameraParams, GBufferTexel};
-use crate::reference::closest_hit;
+use crate::reference::Hit;
 
-/// The G-buffer texel of pixel `(x, y)`.
+/// The G-buffer texel of the camera ray from `cam.eye` along `dir` whose
+/// closest hit is `hit` (`None`: a miss); twin of WGSL `gbuffer_texel`.
 ///
 /// Normals are flipped to the side the camera ray comes from (a back face
 /// seen by the camera is lit like a front face); the shadow-ray origin is
 /// the hit point moved `ray_offset` along the flipped geometric normal.
-pub fn primary_texel(bvh: &Bvh, shading: &ShadingData, cam: &CameraParams, x: u32, y: u32) -> GBufferTexel {
-    let dir = camera_ray(cam, x, y);
-    let Some(hit) = closest_hit(bvh, cam.eye, dir, f32::INFINITY) else {
+pub fn hit_texel(
+    bvh: &Bvh,
+    shading: &ShadingData,
+    cam: &CameraParams,
+    dir: Vec3,
+    hit: Option<Hit>,
+) -> GBufferTexel {
+    let Some(hit) = hit else {
         return GBufferTexel {
             triangle: u32::MAX,
             ..Default::default()
@@ -44,10 +54,49 @@ pub fn primary_texel(bvh: &Bvh, shading: &ShadingData, cam: &CameraParams, x: u3
     }
 }
 
+/// The G-buffer texel of pixel `(x, y)`, and the work its ray did.
+pub fn primary_texel_counted(
+    bvh: &Bvh,
+    shading: &ShadingData,
+    cam: &CameraParams,
+    x: u32,
+    y: u32,
+) -> (GBufferTexel, TraceCounters) {
+    let dir = camera_ray(cam, x, y);
+    let mut counters = TraceCounters::default();
+    // f32::MAX like the kernel's initial t_best (no hit can reach it anyway).
+    let hit = closest_hit_counted(bvh, cam.eye, dir, f32::MAX, &mut counters);
+    (hit_texel(bvh, shading, cam, dir, hit), counters)
+}
+
+/// The G-buffer texel of pixel `(x, y)`.
+pub fn primary_texel(bvh: &Bvh, shading: &ShadingData, cam: &CameraParams, x: u32, y: u32) -> GBufferTexel {
+    primary_texel_counted(bvh, shading, cam, x, y).0
+}
+
 /// The whole G-buffer (row-major, row 0 at the top), rows spread over all cores.
 pub fn primary_gbuffer(bvh: &Bvh, shading: &ShadingData, cam: &CameraParams) -> Vec<GBufferTexel> {
+    primary_gbuffer_counted(bvh, shading, cam).0
+}
+
+/// [`primary_gbuffer`] and the work of all its rays, counted as the per-ray
+/// kernel counts it with `COUNTERS` on (see [`crate::counters`]).
+pub fn primary_gbuffer_counted(
+    bvh: &Bvh,
+    shading: &ShadingData,
+    cam: &CameraParams,
+) -> (Vec<GBufferTexel>, TraceCounters) {
     let w = cam.width as usize;
-    super::parallel::per_pixel(w, cam.height as usize, |p| {
-        primary_texel(bvh, shading, cam, (p % w) as u32, (p / w) as u32)
-    })
+    let per_pixel = super::parallel::per_pixel(w, cam.height as usize, |p| {
+        primary_texel_counted(bvh, shading, cam, (p % w) as u32, (p / w) as u32)
+    });
+    let mut total = TraceCounters::default();
+    let texels = per_pixel
+        .into_iter()
+        .map(|(texel, c)| {
+            total += c;
+            texel
+        })
+        .collect();
+    (texels, total)
 }

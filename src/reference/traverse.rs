@@ -5,6 +5,7 @@ use glam::Vec3;
 
 use super::intersect::{RayBox, intersect_box, intersect_triangle, safe_inverse};
 use crate::bvh::Bvh;
+use crate::counters::TraceCounters;
 
 /// The nearest intersection along a ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -22,6 +23,19 @@ pub struct Hit {
 /// The nearest hit with `0 < t < t_max`, or `None`. Children are visited
 /// nearer-first; a box farther than the best hit so far is skipped.
 pub fn closest_hit(bvh: &Bvh, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
+    closest_hit_counted(bvh, origin, dir, t_max, &mut TraceCounters::default())
+}
+
+/// [`closest_hit`], adding its work to `counters` as the per-ray primary
+/// kernel counts it: the root's box test, then per inner node one step and
+/// two box tests, per leaf triangle one access and one test (no culling).
+pub fn closest_hit_counted(
+    bvh: &Bvh,
+    origin: Vec3,
+    dir: Vec3,
+    t_max: f32,
+    counters: &mut TraceCounters,
+) -> Option<Hit> {
     let ray = RayBox {
         origin,
         inv_dir: safe_inverse(dir),
@@ -29,6 +43,7 @@ pub fn closest_hit(bvh: &Bvh, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit
     let mut best: Option<Hit> = None;
     let mut t_best = t_max;
     let mut stack = Vec::with_capacity(64);
+    counters.box_tests += 1;
     if intersect_box(&ray, &bvh.nodes[0], t_best).is_some() {
         stack.push(0u32);
     }
@@ -36,6 +51,9 @@ pub fn closest_hit(bvh: &Bvh, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit
         let node = &bvh.nodes[i as usize];
         if node.is_leaf() {
             for ix in node.first..node.first + node.count {
+                counters.triangles_accessed += 1;
+                counters.triangles_after_culling += 1;
+                counters.triangle_tests += 1;
                 if let Some((t, u, v)) = intersect_triangle(&bvh.triangles[ix as usize], origin, dir, t_best)
                 {
                     t_best = t;
@@ -49,6 +67,8 @@ pub fn closest_hit(bvh: &Bvh, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit
             }
             continue;
         }
+        counters.traversal_steps += 1;
+        counters.box_tests += 2;
         let (l, r) = (node.first, node.first + 1);
         let tl = intersect_box(&ray, &bvh.nodes[l as usize], t_best);
         let tr = intersect_box(&ray, &bvh.nodes[r as usize], t_best);

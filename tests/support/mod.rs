@@ -1,8 +1,11 @@
-//! Helpers shared by the integration tests: a deterministic random generator
-//! and random triangle soups.
+//! Helpers shared by the integration tests: a deterministic random generator,
+//! random triangle soups and scenes built in code.
 #![allow(dead_code)] // each test binary uses a different subset
 
-use glam::Vec3;
+use std::path::PathBuf;
+
+use glam::{Mat4, Vec2, Vec3};
+use penumbra::scene::{Instance, LoadWarnings, Material, Scene, SceneTriangle};
 
 pub mod gpu;
 
@@ -222,7 +225,7 @@ pub fn compare_masks(
 #[allow(clippy::too_many_arguments)]
 pub fn assert_masks_match_oracle(
     label: &str,
-    scene: &penumbra::scene::Scene,
+    scene: &Scene,
     bvh: &penumbra::bvh::Bvh,
     view: &penumbra::view::View,
     gbuffer: &[penumbra::layout::GBufferTexel],
@@ -252,10 +255,9 @@ pub fn assert_masks_match_oracle(
 
 /// A scene built in code: one triangle list, each triangle with its material
 /// index, flat normals and one white-ish material per entry of `colors`.
-pub fn scene_from_triangles(triangles: &[([Vec3; 3], u32)], colors: &[[f32; 3]]) -> penumbra::scene::Scene {
-    use penumbra::scene::{Instance, LoadWarnings, Material, SceneTriangle};
-    penumbra::scene::Scene {
-        source: std::path::PathBuf::from("generated-in-test"),
+pub fn scene_from_triangles(triangles: &[([Vec3; 3], u32)], colors: &[[f32; 3]]) -> Scene {
+    Scene {
+        source: PathBuf::from("generated-in-test"),
         triangles: triangles
             .iter()
             .map(|&(positions, material)| {
@@ -264,7 +266,7 @@ pub fn scene_from_triangles(triangles: &[([Vec3; 3], u32)], colors: &[[f32; 3]])
                 SceneTriangle {
                     positions,
                     normals: [n; 3],
-                    uvs: [glam::Vec2::ZERO; 3],
+                    uvs: [Vec2::ZERO; 3],
                     material,
                     instance: 0,
                 }
@@ -281,7 +283,7 @@ pub fn scene_from_triangles(triangles: &[([Vec3; 3], u32)], colors: &[[f32; 3]])
         instances: vec![Instance {
             node: 0,
             name: None,
-            world_from_object: glam::Mat4::IDENTITY,
+            world_from_object: Mat4::IDENTITY,
         }],
         camera: None,
         warnings: LoadWarnings::default(),

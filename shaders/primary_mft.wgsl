@@ -1,0 +1,352 @@
+// Primary visibility with multi-frusta: one 16-wide vector per 16x16 pixel block, lane = 4x4-pixel frustum, closest hit per ray.
+// Dispatched by the primary pass (src/gpu/primary_pass.rs, PrimaryTracer::Mft); CPU twin: src/reference/primary_mft.rs.
+
+#import shared/bvh
+#import shared/counters
+#import shared/frame
+#import shared/intersect
+#import shared/primary
+#import shared/vec16
+
+// Lane i owns frustum i: the 16 pixels (x0 + k % 4, y0 + k / 4), k = 0..16, with
+// x0 = 16 bx + 4 (i % 4), y0 = 16 by + 4 (i / 4). Its rays share the eye, so its
+// frustum is the pyramid from the eye through the four pixel-edge corners of
+// the 4x4 footprint (clipped to the image): every pixel-centre ray lies inside
+// it by half a pixel, a margin far above f32 rounding, so the plane tests
+// below never cull a box or triangle one of its rays hits.
+//
+// Depth: forward is a unit vector and right, up are orthogonal to it, so every
+// camera ray has dot(dir, forward) = 1 and reaches a point p at
+// t = dot(p - eye, forward). No ray can meet a box (triangle) before its
+// nearest corner's (vertex's) depth, so once every ray of a frustum has a hit
+// nearer than that, the frustum drops it. DEPTH_SLACK keeps that conservative
+// against the rounding of the hit's t (Moller-Trumbore's t is exact to far
+// better than 1e-3 except at grazing angles that no test scene reaches).
+//
+// Ties: each ray keeps the first hit with a strictly smaller t, as the
+// per-ray kernel does; the traversal order differs, so where two triangles
+// give one ray exactly the same t the two kernels may keep different ones.
+
+const STACK_SIZE: u32 = 64u;
+const DEPTH_SLACK: f32 = 1.001;
+const T_NONE: f32 = 3.4028234663852886e38;
+const NO_TRIANGLE: u32 = 0xffffffffu;
+
+// This lane's frustum and its 16 rays (indexed only with constants, so that
+// they stay in registers: the code that touches them is unrolled by hand).
+var<private> f_dirs: array<vec3<f32>, 16>;
+var<private> f_best: array<vec3<f32>, 16>;  // (t, u, v) of the closest hit so far
+var<private> f_tri: array<u32, 16>;         // its triangle, NO_TRIANGLE for none
+var<private> f_t: array<f32, 16>;           // its t: T_NONE, or 0 for a ray outside the image
+var<private> f_t_max: f32;                  // max of f_t
+var<private> f_side: array<vec3<f32>, 4>;   // inward normals of the side planes through the eye
+var<private> f_corner: array<vec3<f32>, 4>; // the corner-ray directions
+var<private> f_x0: u32;
+var<private> f_y0: u32;
+
+// The vector's traversal stack (the same in every lane): node, frusta that
+// want it, and its box's depth (to drop frusta whose rays have all hit nearer).
+var<private> stack_node: array<u32, 64>;
+var<private> stack_mask: array<u32, 64>;
+var<private> stack_depth: array<f32, 64>;
+
+// The direction through the pixel-edge point (ex, ey) of the image.
+fn edge_dir(ex: u32, ey: u32) -> vec3<f32> {
+    let sx = 2.0 * f32(ex) / f32(camera.width) - 1.0;
+    let sy = 1.0 - 2.0 * f32(ey) / f32(camera.height);
+    return camera.forward + sx * camera.right + sy * camera.up;
+}
+
+// Ray k of this lane; a bit of the returned mask when its pixel is in the image.
+fn setup_ray(k: u32) -> u32 {
+    let x = f_x0 + (k & 3u);
+    let y = f_y0 + (k >> 2u);
+    let inside = x < camera.width && y < camera.height;
+    f_dirs[k] = pixel_dir(x, y);
+    f_best[k] = vec3<f32>(-1.0, 0.0, 0.0);
+    f_tri[k] = NO_TRIANGLE;
+    f_t[k] = select(0.0, T_NONE, inside);
+    return select(0u, 1u << k, inside);
+}
+
+fn side_plane(k: u32, centre: vec3<f32>) {
+    let n = cross(f_corner[k], f_corner[(k + 1u) % 4u]);
+    f_side[k] = select(n, -n, dot(n, centre) < 0.0);
+}
+
+// Sets up this lane's frustum; returns the mask of its rays inside the image.
+fn setup_frustum(x0: u32, y0: u32) -> u32 {
+    f_x0 = x0;
+    f_y0 = y0;
+    let inside = setup_ray(0u) | setup_ray(1u) | setup_ray(2u) | setup_ray(3u)
+        | setup_ray(4u) | setup_ray(5u) | setup_ray(6u) | setup_ray(7u)
+        | setup_ray(8u) | setup_ray(9u) | setup_ray(10u) | setup_ray(11u)
+        | setup_ray(12u) | setup_ray(13u) | setup_ray(14u) | setup_ray(15u);
+    f_t_max = select(0.0, T_NONE, inside != 0u);
+    // Clipped to the image; meaningless (and never used) for a lane with no pixel.
+    let x1 = min(x0 + 4u, camera.width);
+    let y1 = min(y0 + 4u, camera.height);
+    f_corner[0] = edge_dir(x0, y0);
+    f_corner[1] = edge_dir(x1, y0);
+    f_corner[2] = edge_dir(x1, y1);
+    f_corner[3] = edge_dir(x0, y1);
+    let centre = f_corner[0] + f_corner[2];
+    side_plane(0u, centre);
+    side_plane(1u, centre);
+    side_plane(2u, centre);
+    side_plane(3u, centre);
+    return inside;
+}
+
+// Depth of the box's nearest corner along the view direction (see the top).
+fn box_depth(node: BvhNode) -> f32 {
+    let p = select(node.bmax, node.bmin, camera.forward > vec3<f32>(0.0));
+    return dot(camera.forward, p - camera.eye);
+}
+
+// The traversal order: the child whose centre lies nearer along `order_dir` first.
+fn order_key(node: BvhNode, order_dir: vec3<f32>) -> f32 {
+    return dot((node.bmin + node.bmax) * 0.5 - camera.eye, order_dir);
+}
+
+fn box_outside(n: vec3<f32>, node: BvhNode) -> bool {
+    let p = select(node.bmin, node.bmax, n > vec3<f32>(0.0));
+    return dot(n, p - camera.eye) < 0.0;
+}
+
+// Whether a ray of this frustum may meet the box before its closest hit so far.
+fn frustum_may_hit_box(node: BvhNode, depth: f32) -> bool {
+    return depth <= f_t_max * DEPTH_SLACK
+        && !(box_outside(f_side[0], node) || box_outside(f_side[1], node)
+            || box_outside(f_side[2], node) || box_outside(f_side[3], node));
+}
+
+fn all_outside(n: vec3<f32>, a0: vec3<f32>, a1: vec3<f32>, a2: vec3<f32>) -> bool {
+    return dot(n, a0) < 0.0 && dot(n, a1) < 0.0 && dot(n, a2) < 0.0;
+}
+
+// All four corner rays lie strictly outside the edge plane with normal m
+// (d: the orientation of the triangle seen from the eye).
+fn edge_culls(m: vec3<f32>, d: f32) -> bool {
+    let s = vec4<f32>(dot(m, f_corner[0]), dot(m, f_corner[1]), dot(m, f_corner[2]), dot(m, f_corner[3]));
+    return select(all(s > vec4<f32>(0.0)), all(s < vec4<f32>(0.0)), d > 0.0);
+}
+
+// No ray of this frustum can hit the triangle before its closest hit so far:
+// the triangle is nearer than no ray's hit, outside a side plane, or (corner
+// rays) the whole frustum passes outside one of its edges.
+fn frustum_culls_triangle(tri: BvhTriangle) -> bool {
+    let a0 = tri.v0 - camera.eye;
+    let a1 = (tri.v0 + tri.e1) - camera.eye;
+    let a2 = (tri.v0 + tri.e2) - camera.eye;
+    let f = camera.forward;
+    let near = min(min(dot(f, a0), dot(f, a1)), dot(f, a2));
+    if near > f_t_max * DEPTH_SLACK {
+        return true;
+    }
+    if all_outside(f_side[0], a0, a1, a2) || all_outside(f_side[1], a0, a1, a2)
+        || all_outside(f_side[2], a0, a1, a2) || all_outside(f_side[3], a0, a1, a2) {
+        return true;
+    }
+    let m0 = cross(a0, a1);
+    let m1 = cross(a1, a2);
+    let m2 = cross(a2, a0);
+    let d = dot(m0, a2);
+    if d == 0.0 {
+        // The eye lies in the triangle's plane (as far as f32 can tell): left to the ray tests.
+        return false;
+    }
+    return edge_culls(m0, d) || edge_culls(m1, d) || edge_culls(m2, d);
+}
+
+// Ray k against triangle `ix`: exactly the per-ray kernel's test and update.
+fn test_ray(k: u32, tri: BvhTriangle, ix: u32) {
+    let h = intersect_triangle(tri, camera.eye, f_dirs[k], f_t[k]);
+    if h.x >= 0.0 {
+        f_t[k] = h.x;
+        f_best[k] = h;
+        f_tri[k] = ix;
+    }
+}
+
+// All 16 rays (unrolled: every loop iteration counts towards lavapipe's limit).
+fn test_rays(tri: BvhTriangle, ix: u32) {
+    test_ray(0u, tri, ix);
+    test_ray(1u, tri, ix);
+    test_ray(2u, tri, ix);
+    test_ray(3u, tri, ix);
+    test_ray(4u, tri, ix);
+    test_ray(5u, tri, ix);
+    test_ray(6u, tri, ix);
+    test_ray(7u, tri, ix);
+    test_ray(8u, tri, ix);
+    test_ray(9u, tri, ix);
+    test_ray(10u, tri, ix);
+    test_ray(11u, tri, ix);
+    test_ray(12u, tri, ix);
+    test_ray(13u, tri, ix);
+    test_ray(14u, tri, ix);
+    test_ray(15u, tri, ix);
+    f_t_max = max(max(max(max(f_t[0], f_t[1]), max(f_t[2], f_t[3])), max(max(f_t[4], f_t[5]), max(f_t[6], f_t[7]))),
+        max(max(max(f_t[8], f_t[9]), max(f_t[10], f_t[11])), max(max(f_t[12], f_t[13]), max(f_t[14], f_t[15]))));
+}
+
+fn write_texel(k: u32) {
+    let x = f_x0 + (k & 3u);
+    let y = f_y0 + (k >> 2u);
+    if x < camera.width && y < camera.height {
+        gbuffer[y * camera.width + x] = gbuffer_texel(f_tri[k], f_best[k], f_dirs[k]);
+    }
+}
+
+@compute @workgroup_size(VEC16_WG_SIZE)
+fn main(ids: Vec16Ids) {
+    vec16_init(ids);
+    // A 2-D dispatch: x = block column (VEC16_WG_SIZE / 16 per workgroup), y = block row.
+    let bx = ids.workgroup.x * (VEC16_WG_SIZE / 16u) + g_vector_in_wg;
+    let by = ids.workgroup.y;
+    if bx * 16u >= camera.width {
+        return;  // past the last block column (uniform: per vector)
+    }
+    let inside = setup_frustum(bx * 16u + (g_lane & 3u) * 4u, by * 16u + (g_lane >> 2u) * 4u);
+    let order_dir = edge_dir(bx * 16u + 8u, by * 16u + 8u);
+
+    // The traversal state; every lane holds the same values.
+    var node = 0u;        // inner node to visit next (when not in a leaf)
+    var mask = 0u;        // frusta that entered `node`
+    var cursor = 0u;      // next triangle of the current leaf
+    var end = 0u;         // end of the current leaf's triangles
+    var depth = 0u;       // stack depth
+    var popping = false;  // the next step pops the stack
+    // Work counters (shared/counters), uniform; dead code unless COUNTERS.
+    var n_steps = 0u;
+    var n_box_tests = 1u;  // the root's
+    var n_accessed = 0u;
+    var n_after_culling = 0u;
+    var n_triangle_tests = 0u;
+
+    let root = nodes[0];
+    mask = ballot16(inside != 0u && frustum_may_hit_box(root, box_depth(root)));
+    var running = mask != 0u;
+    if root.count > 0u {
+        cursor = root.first;
+        end = root.first + root.count;
+    }
+    // One step per iteration: one leaf triangle, one stack pop, or one inner
+    // node. No other loop in here: lavapipe counts every iteration of every
+    // loop an invocation runs, nested ones included, against one limit.
+    var iterations = 0u;
+    var overflow = false;
+    loop {
+        if !running {
+            break;
+        }
+        iterations += 1u;
+        if iterations > ITERATION_BUDGET {
+            overflow = true;
+            break;
+        }
+        var enter = false;
+        if cursor < end {
+            let tri = triangles[cursor];
+            var tested = false;
+            if (mask & (1u << g_lane)) != 0u && !frustum_culls_triangle(tri) {
+                tested = true;
+                test_rays(tri, cursor);
+            }
+            if COUNTERS {
+                let survivors = ballot16(tested);
+                n_accessed += 1u;
+                n_after_culling += select(0u, 1u, survivors != 0u);
+                n_triangle_tests += countOneBits(survivors);
+            }
+            cursor += 1u;
+            if cursor == end {
+                popping = true;
+            }
+        } else if popping {
+            if depth == 0u {
+                running = false;
+            } else {
+                depth -= 1u;
+                // Frusta whose rays have all hit nearer than the box drop it
+                // (a compare with the stored depth, not a box test).
+                let m = stack_mask[depth] & ballot16(stack_depth[depth] <= f_t_max * DEPTH_SLACK);
+                if m != 0u {
+                    node = stack_node[depth];
+                    mask = m;
+                    popping = false;
+                    enter = true;
+                }
+            }
+        } else {
+            n_steps += 1u;
+            n_box_tests += 2u;
+            let l = nodes[node].first;
+            let left = nodes[l];
+            let right = nodes[l + 1u];
+            let dl = box_depth(left);
+            let dr = box_depth(right);
+            let mine = (mask & (1u << g_lane)) != 0u;
+            let ml = ballot16(mine && frustum_may_hit_box(left, dl));
+            let mr = ballot16(mine && frustum_may_hit_box(right, dr));
+            if ml != 0u && mr != 0u {
+                // Nearer child first; the other waits on the stack with its frusta.
+                let right_first = order_key(right, order_dir) < order_key(left, order_dir);
+                node = select(l, l + 1u, right_first);
+                mask = select(ml, mr, right_first);
+                // The host checked that the BVH is shallower than the stack.
+                let top = min(depth, STACK_SIZE - 1u);
+                stack_node[top] = select(l + 1u, l, right_first);
+                stack_mask[top] = select(mr, ml, right_first);
+                stack_depth[top] = select(dr, dl, right_first);
+                depth += 1u;
+                enter = true;
+            } else if ml != 0u {
+                node = l;
+                mask = ml;
+                enter = true;
+            } else if mr != 0u {
+                node = l + 1u;
+                mask = mr;
+                enter = true;
+            } else {
+                popping = true;
+            }
+        }
+        if enter {
+            let c = nodes[node];
+            if c.count > 0u {
+                cursor = c.first;
+                end = c.first + c.count;
+            }
+        }
+    }
+    if overflow && inside != 0u {
+        // The host turns this into an error: the texels below are incomplete.
+        atomicAdd(&status[WORD_STATUS], countOneBits(inside));
+    }
+    if COUNTERS && g_lane == 0u {
+        atomicAdd(&status[WORD_TRAVERSAL_STEPS], n_steps);
+        atomicAdd(&status[WORD_BOX_TESTS], n_box_tests);
+        atomicAdd(&status[WORD_TRIANGLES_ACCESSED], n_accessed);
+        atomicAdd(&status[WORD_TRIANGLES_AFTER_CULLING], n_after_culling);
+        atomicAdd(&status[WORD_TRIANGLE_TESTS], n_triangle_tests);
+    }
+    write_texel(0u);
+    write_texel(1u);
+    write_texel(2u);
+    write_texel(3u);
+    write_texel(4u);
+    write_texel(5u);
+    write_texel(6u);
+    write_texel(7u);
+    write_texel(8u);
+    write_texel(9u);
+    write_texel(10u);
+    write_texel(11u);
+    write_texel(12u);
+    write_texel(13u);
+    write_texel(14u);
+    write_texel(15u);
+}

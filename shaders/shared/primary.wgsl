@@ -1,0 +1,72 @@
+// The bindings, camera rays and G-buffer texels of the primary pass, shared by its kernels.
+// Imported by shaders/primary.wgsl (per-ray) and shaders/primary_mft.wgsl, so both bind alike and write alike.
+
+@group(0) @binding(0) var<uniform> camera: CameraParams;
+@group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
+@group(0) @binding(2) var<storage, read> triangles: array<BvhTriangle>;
+@group(0) @binding(3) var<storage, read> shading: array<ShadingTriangle>;
+@group(0) @binding(4) var<storage, read> materials: array<GpuMaterial>;
+@group(0) @binding(5) var<storage, read_write> gbuffer: array<GBufferTexel>;
+// 8 words (shared/counters): [0] pixels whose rays ran out of loop iterations
+// (the host reports an error), [1..6] the work counters.
+@group(0) @binding(6) var<storage, read_write> status: array<atomic<u32>>;
+@group(0) @binding(7) var<storage, read> textures: array<GpuTexture>;
+@group(0) @binding(8) var<storage, read> texels: array<vec4<f32>>;
+
+// Below lavapipe's 65,535 loop iterations per invocation (all loops counted);
+// the host lowers it only to test the overflow report.
+override ITERATION_BUDGET: u32 = 60000u;
+
+// The camera ray direction through the centre of pixel (x, y); twin of frame::camera_ray.
+fn pixel_dir(x: u32, y: u32) -> vec3<f32> {
+    let sx = 2.0 * (f32(x) + 0.5) / f32(camera.width) - 1.0;
+    let sy = 1.0 - 2.0 * (f32(y) + 0.5) / f32(camera.height);
+    return camera.forward + sx * camera.right + sy * camera.up;
+}
+
+// Base colour factor times the nearest texel (coordinates wrap); twin of ShadingData::albedo.
+fn albedo(material: GpuMaterial, uv: vec2<f32>) -> vec3<f32> {
+    if material.texture >= arrayLength(&textures) {
+        return material.base_color;
+    }
+    let t = textures[material.texture];
+    let u = uv.x - floor(uv.x);
+    let v = uv.y - floor(uv.y);
+    let x = min(u32(u * f32(t.width)), t.width - 1u);
+    let y = min(u32(v * f32(t.height)), t.height - 1u);
+    return material.base_color * texels[t.offset + y * t.width + x].xyz;
+}
+
+// The texel of the camera ray from the eye along `dir` whose closest hit is
+// triangle `best_tri` at `best` = (t, u, v), or of a miss (best_tri = 0xffffffff).
+// Twin of reference::primary::hit_texel.
+fn gbuffer_texel(best_tri: u32, best: vec3<f32>, dir: vec3<f32>) -> GBufferTexel {
+    var texel: GBufferTexel;
+    texel.triangle = 0xffffffffu;
+    if best_tri != 0xffffffffu {
+        let tri = triangles[best_tri];
+        let sh = shading[best_tri];
+        var geo = normalize(cross(tri.e1, tri.e2));
+        let w = 1.0 - best.y - best.z;
+        let interpolated = sh.n0 * w + sh.n1 * best.y + sh.n2 * best.z;
+        var normal = geo;
+        if dot(interpolated, interpolated) > 0.0 {
+            normal = normalize(interpolated);
+        }
+        if dot(geo, dir) > 0.0 {
+            geo = -geo;
+        }
+        if dot(normal, dir) > 0.0 {
+            normal = -normal;
+        }
+        let point = camera.eye + dir * best.x;
+        let uv = sh.uv0 * w + sh.uv1 * best.y + sh.uv2 * best.z;
+        texel.origin = point + geo * camera.ray_offset;
+        texel.depth = best.x * length(dir);
+        texel.normal = normal;
+        texel.triangle = best_tri;
+        texel.geo_normal = geo;
+        texel.albedo = albedo(materials[sh.material], uv);
+    }
+    return texel;
+}

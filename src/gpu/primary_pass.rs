@@ -1,0 +1,279 @@
+//! The primary pass: camera rays to a G-buffer, with one of two kernels that
+//! bind alike and write alike (`shaders/shared/primary.wgsl`): per-ray
+//! (`shaders/primary.wgsl`, one invocation per pixel) or multi-frusta
+//! (`shaders/primary_mft.wgsl`, one 16-wide vector per 16×16 pixel block).
+//!
+//! Either kernel counts its loop iterations and stops a ray (per-ray) or a
+//! vector (multi-frusta) before lavapipe's loop limit would cut it silently;
+//! it then adds its pixels to status word 0 and the pass returns an error.
+//! For primary rays that takes a pathological scene (the whole block's rays
+//! crossing tens of thousands of boxes), so the pass reports it rather than
+//! suspending and resuming as the shadow pass does.
+
+use super::kernel::{Binding, Checks, Kernel, uniform_buffer};
+use super::{GpuContext, GpuScene, GpuTimer, VectorVariant, read_buffer};
+use crate::counters::{STATUS_WORDS, TraceCounters, WORD_STATUS};
+use crate::layout::CameraParams;
+use crate::reference::primary_mft::{BLOCK, ITERATION_BUDGET};
+use crate::{Error, Result};
+
+/// Which kernel traces the camera rays.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum PrimaryTracer {
+    /// One invocation per pixel, each with its own traversal stack.
+    #[default]
+    PerRay,
+    /// One 16-wide vector per 16×16 pixel block; lane `i` traces the frustum of
+    /// 4×4 pixels `i` (the paper's primary frusta), culling boxes and triangles
+    /// for all 16 of its rays at once.
+    Mft,
+}
+
+impl std::fmt::Display for PrimaryTracer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            PrimaryTracer::PerRay => "per-ray",
+            PrimaryTracer::Mft => "mft",
+        })
+    }
+}
+
+/// What a primary dispatch reported besides the G-buffer.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PrimaryStatus {
+    /// Pixels whose rays ran out of loop iterations (their texels are incomplete).
+    pub overflow_pixels: u32,
+    /// The work counters, when the pass was built with counters on.
+    pub counters: Option<TraceCounters>,
+}
+
+impl PrimaryStatus {
+    /// The counters, or an error when a ray ran out of loop iterations.
+    pub fn check(self) -> Result<Option<TraceCounters>> {
+        if self.overflow_pixels != 0 {
+            return Err(Error::Gpu(format!(
+                "primary pass: the camera rays of {} pixels ran out of their loop iterations \
+                 (BVH too deep or degenerate for this view)",
+                self.overflow_pixels
+            )));
+        }
+        Ok(self.counters)
+    }
+}
+
+/// The primary pass's pipeline for one tracer.
+#[derive(Debug)]
+pub struct PrimaryPass {
+    kernel: Kernel,
+    tracer: PrimaryTracer,
+    variant: Option<VectorVariant>,
+    vectors_per_workgroup: u32,
+    counters: bool,
+}
+
+impl PrimaryPass {
+    /// Builds the pipeline of `tracer`. `variant` chooses the vector variant of the
+    /// multi-frusta kernel as in [`VectorVariant::choose`] (the per-ray kernel has no
+    /// vectors and ignores it); `counters` compiles the work counters in.
+    pub fn new(
+        ctx: &GpuContext,
+        tracer: PrimaryTracer,
+        variant: Option<VectorVariant>,
+        counters: bool,
+    ) -> Result<PrimaryPass> {
+        PrimaryPass::with_iteration_budget(ctx, tracer, variant, counters, ITERATION_BUDGET)
+    }
+
+    /// [`PrimaryPass::new`] with the loop iterations a ray (per-ray) or a vector
+    /// (multi-frusta) may run lowered to `budget` (1..=60,000), so that tests can drive
+    /// the overflow report on small scenes.
+    pub fn with_iteration_budget(
+        ctx: &GpuContext,
+        tracer: PrimaryTracer,
+        variant: Option<VectorVariant>,
+        counters: bool,
+        budget: u32,
+    ) -> Result<PrimaryPass> {
+        if !(1..=ITERATION_BUDGET).contains(&budget) {
+            return Err(Error::Gpu(format!(
+                "primary pass: iteration budget {budget} outside 1..={ITERATION_BUDGET} \
+                 (lavapipe ends loops after 65,535 iterations)"
+            )));
+        }
+        let mut constants: Vec<(&str, f64)> = vec![
+            ("COUNTERS", f64::from(u8::from(counters))),
+            ("ITERATION_BUDGET", f64::from(budget)),
+        ];
+        let (name, aliases, variant, vectors_per_workgroup) = match tracer {
+            PrimaryTracer::PerRay => ("primary", &[][..], None, 1),
+            PrimaryTracer::Mft => {
+                let (variant, per_wg) = VectorVariant::choose(&ctx.info, variant)?;
+                if variant == VectorVariant::Subgroup {
+                    constants.push(("VEC16_PER_WG", f64::from(per_wg)));
+                }
+                let aliases: &[(&str, &str)] = match variant {
+                    VectorVariant::Subgroup => &[("shared/vec16", "shared/vec16_subgroup")],
+                    VectorVariant::Workgroup => &[("shared/vec16", "shared/vec16_workgroup")],
+                };
+                ("primary_mft", aliases, Some(variant), per_wg)
+            }
+        };
+        use Binding::*;
+        let kernel = Kernel::new(
+            ctx,
+            name,
+            aliases,
+            &[
+                Uniform, ReadOnly, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadWrite, ReadOnly, ReadOnly,
+            ],
+            &constants,
+            // Indices: BVH ranges validated by GpuScene::new, stack indices clamped,
+            // pixels bounded by the camera's size (the G-buffer the host binds must
+            // hold width × height texels), private ray arrays indexed by constants.
+            Checks::Unchecked,
+        )?;
+        Ok(PrimaryPass {
+            kernel,
+            tracer,
+            variant,
+            vectors_per_workgroup,
+            counters,
+        })
+    }
+
+    /// The tracer this pass runs.
+    pub fn tracer(&self) -> PrimaryTracer {
+        self.tracer
+    }
+
+    /// The vector variant of the multi-frusta kernel (`None` for per-ray).
+    pub fn variant(&self) -> Option<VectorVariant> {
+        self.variant
+    }
+
+    /// Whether the work counters are compiled in.
+    pub fn has_counters(&self) -> bool {
+        self.counters
+    }
+
+    /// A status buffer for [`PrimaryPass::record`]: [`STATUS_WORDS`] `u32`s,
+    /// `STORAGE | COPY_SRC | COPY_DST`.
+    pub fn status_buffer(device: &wgpu::Device) -> wgpu::Buffer {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("primary status"),
+            size: (STATUS_WORDS * 4) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// Workgroups of a `width`×`height` dispatch, or an error naming the device's limit.
+    pub fn workgroups(&self, ctx: &GpuContext, width: u32, height: u32) -> Result<(u32, u32)> {
+        let (x, y, unit) = match self.tracer {
+            PrimaryTracer::PerRay => (width.div_ceil(8), height.div_ceil(8), "8x8 pixels"),
+            PrimaryTracer::Mft => (
+                width.div_ceil(BLOCK).div_ceil(self.vectors_per_workgroup),
+                height.div_ceil(BLOCK),
+                "16x16-pixel blocks",
+            ),
+        };
+        let limit = ctx.info.max_compute_workgroups_per_dimension;
+        if x > limit || y > limit {
+            return Err(Error::Gpu(format!(
+                "image {width}x{height} needs {x}x{y} workgroups of {unit}; the device allows {limit} per dimension"
+            )));
+        }
+        Ok((x, y))
+    }
+
+    /// Records the pass into `encoder`: clears `status` (see [`PrimaryPass::status_buffer`]),
+    /// then one dispatch over `groups` (from [`PrimaryPass::workgroups`] for the camera's
+    /// size). `camera` is a uniform [`CameraParams`] buffer, `gbuffer` holds
+    /// `width × height` texels. Binds exactly what the renderer's primary kernel always bound.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        camera: &wgpu::Buffer,
+        gbuffer: &wgpu::Buffer,
+        status: &wgpu::Buffer,
+        groups: (u32, u32),
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) {
+        encoder.clear_buffer(status, 0, None);
+        let bind = self.kernel.bind_on(
+            device,
+            &[
+                camera,
+                &scene.nodes,
+                &scene.triangles,
+                &scene.shading,
+                &scene.materials,
+                gbuffer,
+                status,
+                &scene.textures,
+                &scene.texels,
+            ],
+        );
+        self.kernel
+            .record(encoder, "primary", &bind, timestamp_writes, groups);
+    }
+
+    /// Reads a status buffer back after the pass was submitted.
+    pub fn read_status(&self, ctx: &GpuContext, status: &wgpu::Buffer) -> Result<PrimaryStatus> {
+        let words: Vec<u32> = read_buffer(ctx, status, 0..(STATUS_WORDS * 4) as u64)?;
+        let words: [u32; STATUS_WORDS] = words
+            .try_into()
+            .map_err(|_| Error::Gpu("primary status: short read".into()))?;
+        Ok(PrimaryStatus {
+            overflow_pixels: words[WORD_STATUS],
+            counters: self.counters.then(|| TraceCounters::from_status(&words)),
+        })
+    }
+
+    /// Traces `camera`'s image into `gbuffer` (`array<GBufferTexel>`, at least
+    /// width × height), waits, and returns the counters (`None` when not compiled in);
+    /// an error when a ray ran out of loop iterations. Timed as `"primary"` when a timer is given.
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        camera: &CameraParams,
+        gbuffer: &wgpu::Buffer,
+        timer: Option<&mut GpuTimer>,
+    ) -> Result<Option<TraceCounters>> {
+        let pixels = u64::from(camera.width) * u64::from(camera.height);
+        if pixels == 0 || gbuffer.size() < pixels * size_of::<crate::layout::GBufferTexel>() as u64 {
+            return Err(Error::Gpu(format!(
+                "primary pass: a {}x{} image needs a G-buffer of {} texels, got {} bytes",
+                camera.width,
+                camera.height,
+                pixels,
+                gbuffer.size()
+            )));
+        }
+        let groups = self.workgroups(ctx, camera.width, camera.height)?;
+        let camera_buf = uniform_buffer(ctx, "camera", camera);
+        let status = PrimaryPass::status_buffer(&ctx.device);
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        let mut timer = timer;
+        let writes = timer.as_deref_mut().and_then(|t| t.pass_writes("primary"));
+        self.record(
+            &ctx.device,
+            &mut encoder,
+            scene,
+            &camera_buf,
+            gbuffer,
+            &status,
+            groups,
+            writes,
+        );
+        if let Some(t) = timer {
+            t.resolve(&mut encoder);
+        }
+        ctx.queue.submit([encoder.finish()]);
+        self.read_status(ctx, &status)?.check()
+    }
+}
