@@ -14,11 +14,11 @@
 //!
 //! | word | field | 16-wide vector (MFT) | one ray per invocation (per-ray) |
 //! |------|-------|----------------------|----------------------------------|
-//! | 1 | [`traversal_steps`](TraceCounters::traversal_steps) | inner nodes visited by the vector | inner nodes visited by the ray |
-//! | 2 | [`box_tests`](TraceCounters::box_tests) | box vs all 16 frusta: 2 per inner node + 1 for the root | ray–box tests: 2 per inner node + 1 for the root |
-//! | 3 | [`triangles_accessed`](TraceCounters::triangles_accessed) | triangles fetched by the vector (once per leaf visit) | triangles fetched by the ray |
-//! | 4 | [`triangles_after_culling`](TraceCounters::triangles_after_culling) | of those, triangles at least one frustum did not cull | = word 3 (no culling) |
-//! | 5 | [`triangle_tests`](TraceCounters::triangle_tests) | (triangle, frustum) pairs that survived culling: 16-ray tests | ray–triangle tests (= word 3) |
+//! | 1 | [`nodes_visited`](Counters::nodes_visited) | inner nodes visited by the vector | inner nodes visited by the ray |
+//! | 2 | [`box_tests`](Counters::box_tests) | box vs all 16 frusta: 2 per inner node + 1 for the root | ray–box tests: 2 per inner node + 1 for the root |
+//! | 3 | [`triangles_accessed`](Counters::triangles_accessed) | triangles fetched by the vector (once per leaf visit) | triangles fetched by the ray |
+//! | 4 | [`triangles_after_culling`](Counters::triangles_after_culling) | of those, triangles at least one frustum did not cull | = word 3 (no culling) |
+//! | 5 | [`triangle_tests`](Counters::triangle_tests) | (triangle, frustum) pairs that survived culling: 16-ray tests | ray–triangle tests (= word 3) |
 //!
 //! Per-ray counts are scalar; comparing them with 16-wide ones (the paper's
 //! "16-wide AABB tests" for a packet-less tracer) divides them by 16, which is
@@ -29,72 +29,72 @@
 pub const STATUS_WORDS: usize = 8;
 /// Status word: the kernel's own report (primary kernels: pixels out of loop iterations).
 pub const WORD_STATUS: usize = 0;
-/// Status word of [`TraceCounters::traversal_steps`].
-pub const WORD_TRAVERSAL_STEPS: usize = 1;
-/// Status word of [`TraceCounters::box_tests`].
+/// Status word of [`Counters::nodes_visited`].
+pub const WORD_NODES_VISITED: usize = 1;
+/// Status word of [`Counters::box_tests`].
 pub const WORD_BOX_TESTS: usize = 2;
-/// Status word of [`TraceCounters::triangles_accessed`].
+/// Status word of [`Counters::triangles_accessed`].
 pub const WORD_TRIANGLES_ACCESSED: usize = 3;
-/// Status word of [`TraceCounters::triangles_after_culling`].
+/// Status word of [`Counters::triangles_after_culling`].
 pub const WORD_TRIANGLES_AFTER_CULLING: usize = 4;
-/// Status word of [`TraceCounters::triangle_tests`].
+/// Status word of [`Counters::triangle_tests`].
 pub const WORD_TRIANGLE_TESTS: usize = 5;
 
-/// Work done by a tracing kernel (or its CPU twin); see the module docs for
-/// what each count means for vector and per-ray kernels.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct TraceCounters {
-    /// Inner nodes visited.
+/// Work done by a tracer, summed over vectors (MFT: a 4×4 tile's 16 frusta;
+/// packet: one pixel's 16 rays).
+///
+/// "16-wide" means one test of the whole vector: one box against all 16 frusta
+/// (or rays), one triangle against one frustum's 16 rays (or the packet's).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Counters {
+    /// Loop iterations of the vector (inner nodes, leaf triangles and stack pops).
     pub traversal_steps: u64,
-    /// Box tests: 16-wide for vector kernels, single rays for per-ray kernels.
+    /// Inner nodes visited.
+    pub nodes_visited: u64,
+    /// 16-wide box tests: the root, then both children of every inner node visited.
     pub box_tests: u64,
-    /// Triangles fetched at leaves.
+    /// Triangles read at leaves, once per vector ("#tris" in Table 1).
     pub triangles_accessed: u64,
-    /// Triangles fetched that at least one frustum did not cull.
+    /// Triangles that at least one frustum (ray) did not cull ("+culling" in Table 1).
     pub triangles_after_culling: u64,
-    /// 16-ray tests (vector kernels) or ray–triangle tests (per-ray kernels).
+    /// 16-wide triangle tests ("#isec"): (frustum, triangle) pairs that survived culling.
     pub triangle_tests: u64,
+    /// Times a vector ran out of its iteration budget and was resumed.
+    pub suspensions: u64,
 }
 
-impl TraceCounters {
-    /// The counters in a status buffer read back from the GPU ([`STATUS_WORDS`] words).
-    pub fn from_status(words: &[u32; STATUS_WORDS]) -> TraceCounters {
-        TraceCounters {
-            traversal_steps: u64::from(words[WORD_TRAVERSAL_STEPS]),
-            box_tests: u64::from(words[WORD_BOX_TESTS]),
-            triangles_accessed: u64::from(words[WORD_TRIANGLES_ACCESSED]),
-            triangles_after_culling: u64::from(words[WORD_TRIANGLES_AFTER_CULLING]),
-            triangle_tests: u64::from(words[WORD_TRIANGLE_TESTS]),
+impl Counters {
+    /// The counters from a kernel's status words (`words[1..6]`: nodes visited, box tests,
+    /// triangles accessed, triangles after culling, triangle tests).
+    pub fn from_status_words(words: &[u32]) -> Counters {
+        Counters {
+            nodes_visited: words[WORD_NODES_VISITED].into(),
+            box_tests: words[WORD_BOX_TESTS].into(),
+            triangles_accessed: words[WORD_TRIANGLES_ACCESSED].into(),
+            triangles_after_culling: words[WORD_TRIANGLES_AFTER_CULLING].into(),
+            triangle_tests: words[WORD_TRIANGLE_TESTS].into(),
+            ..Counters::default()
+        }
+    }
+
+    /// The counters a GPU kernel reports (it does not count loop iterations or suspensions).
+    pub fn gpu_view(&self) -> Counters {
+        Counters {
+            traversal_steps: 0,
+            suspensions: 0,
+            ..*self
         }
     }
 }
 
-impl std::ops::AddAssign for TraceCounters {
-    fn add_assign(&mut self, o: TraceCounters) {
+impl std::ops::AddAssign for Counters {
+    fn add_assign(&mut self, o: Counters) {
         self.traversal_steps += o.traversal_steps;
+        self.nodes_visited += o.nodes_visited;
         self.box_tests += o.box_tests;
         self.triangles_accessed += o.triangles_accessed;
         self.triangles_after_culling += o.triangles_after_culling;
         self.triangle_tests += o.triangle_tests;
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn status_words_map_to_fields() {
-        let c = TraceCounters::from_status(&[9, 1, 2, 3, 4, 5, 0, 0]);
-        assert_eq!(
-            c,
-            TraceCounters {
-                traversal_steps: 1,
-                box_tests: 2,
-                triangles_accessed: 3,
-                triangles_after_culling: 4,
-                triangle_tests: 5,
-            }
-        );
+        self.suspensions += o.suspensions;
     }
 }

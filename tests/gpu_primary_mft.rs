@@ -11,7 +11,7 @@ mod support;
 
 use glam::Vec3;
 use penumbra::bvh::{Bvh, BvhSettings};
-use penumbra::counters::TraceCounters;
+use penumbra::counters::Counters;
 use penumbra::frame::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
 use penumbra::gpu::{GpuScene, PrimaryPass, PrimaryTracer, VectorVariant, empty_storage_buffer, read_buffer};
 use penumbra::layout::{CameraParams, GBufferTexel};
@@ -84,10 +84,7 @@ fn cases() -> Vec<Case> {
 }
 
 /// Runs `pass` on the GPU; returns the G-buffer and the status it reported.
-fn gpu_gbuffer(
-    pass: &PrimaryPass,
-    case: &Case,
-) -> (Vec<GBufferTexel>, penumbra::Result<Option<TraceCounters>>) {
+fn gpu_gbuffer(pass: &PrimaryPass, case: &Case) -> (Vec<GBufferTexel>, penumbra::Result<Option<Counters>>) {
     let gpu_scene = GpuScene::new(ctx(), &case.scene, &case.bvh).unwrap();
     let bytes = u64::from(case.cam.width * case.cam.height) * size_of::<GBufferTexel>() as u64;
     let gbuffer = empty_storage_buffer(ctx(), "G-buffer", bytes, wgpu::BufferUsages::COPY_SRC).unwrap();
@@ -252,7 +249,7 @@ fn covering_triangle(y: f32) -> [Vec3; 3] {
 
 /// Counters of the CPU twins and of every GPU kernel on a 16×16 image of a
 /// two-triangle scene whose BVH is a root and two one-triangle leaves.
-fn counted(triangles: &[[Vec3; 3]; 2]) -> Vec<(String, TraceCounters)> {
+fn counted(triangles: &[[Vec3; 3]; 2]) -> Vec<(String, Counters)> {
     let tris: Vec<([Vec3; 3], u32)> = triangles.iter().map(|&t| (t, 0)).collect();
     let settings = BvhSettings {
         max_leaf_size: 1,
@@ -296,13 +293,14 @@ fn counted(triangles: &[[Vec3; 3]; 2]) -> Vec<(String, TraceCounters)> {
     out
 }
 
-fn counters(steps: u64, boxes: u64, accessed: u64, after_culling: u64, tests: u64) -> TraceCounters {
-    TraceCounters {
-        traversal_steps: steps,
+fn counters(steps: u64, boxes: u64, accessed: u64, after_culling: u64, tests: u64) -> Counters {
+    Counters {
+        nodes_visited: steps,
         box_tests: boxes,
         triangles_accessed: accessed,
         triangles_after_culling: after_culling,
         triangle_tests: tests,
+        ..Counters::default()
     }
 }
 

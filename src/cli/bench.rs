@@ -5,7 +5,12 @@
 use std::path::{Path, PathBuf};
 
 use penumbra::bvh::{Bvh, BvhSettings};
-use penumbra::gpu::{FrameSettings, GpuContext, GpuOptions, GpuScene, Renderer, RendererOptions, Tracer};
+use penumbra::frame::{RAY_OFFSET_FRACTION, camera_params};
+use penumbra::gpu::{
+    FrameSettings, GpuContext, GpuOptions, GpuScene, GpuTimer, PrimaryPass, PrimaryTracer, Renderer,
+    RendererOptions, Tracer, empty_storage_buffer,
+};
+use penumbra::layout::GBufferTexel;
 use penumbra::reference::counters::Counters;
 use penumbra::reference::shadow::MASK_SKY;
 use penumbra::scene::Scene;
@@ -129,6 +134,18 @@ struct TracerResult {
     counters: Option<Counters>,
 }
 
+/// One primary tracer's figures in one case.
+#[derive(Debug, Serialize)]
+struct PrimaryResult {
+    tracer: String,
+    primary_ms: Vec<f64>,
+    primary_ms_min: f64,
+    primary_ms_median: f64,
+    /// MFT primary's median speedup over this tracer.
+    mft_speedup: f64,
+    counters: Option<Counters>,
+}
+
 /// One case's figures.
 #[derive(Debug, Serialize)]
 struct CaseResult {
@@ -141,6 +158,7 @@ struct CaseResult {
     height: u32,
     shadow_rays: u64,
     primary_ms_median: f64,
+    primary: Vec<PrimaryResult>,
     tracers: Vec<TracerResult>,
     /// Counter reductions of MFT against the packet tracer (packet / MFT).
     reductions_vs_packet: Option<Reductions>,
@@ -397,6 +415,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 }),
                 _ => None,
             };
+            let primary_results = bench_primary(&ctx, args, &gpu_scene, &case.view, &case.scene)?;
             let result = CaseResult {
                 scene: case.name.clone(),
                 view: case.view_name.clone(),
@@ -407,6 +426,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 height: h,
                 shadow_rays: rays,
                 primary_ms_median: median(&primary),
+                primary: primary_results,
                 tracers: tracer_results,
                 reductions_vs_packet,
             };
@@ -430,6 +450,66 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         println!("wrote     {}", path.display());
     }
     Ok(())
+}
+
+/// Times the camera-ray pass alone with each primary tracer, then counts its work.
+fn bench_primary(
+    ctx: &GpuContext,
+    args: &BenchArgs,
+    scene: &GpuScene,
+    view: &View,
+    cpu_scene: &Scene,
+) -> Result<Vec<PrimaryResult>> {
+    let (w, h) = args.size;
+    let camera = camera_params(
+        &view.camera,
+        w,
+        h,
+        cpu_scene.bounds().diagonal() * RAY_OFFSET_FRACTION,
+    );
+    let gbuffer = empty_storage_buffer(
+        ctx,
+        "bench G-buffer",
+        u64::from(w) * u64::from(h) * size_of::<GBufferTexel>() as u64,
+        wgpu::BufferUsages::empty(),
+    )?;
+    let mut out = Vec::new();
+    for tracer in [PrimaryTracer::Mft, PrimaryTracer::PerRay] {
+        let pass = PrimaryPass::new(ctx, tracer, args.vector.forced(), false)?;
+        let mut times = Vec::new();
+        for run in 0..=args.runs {
+            eprint!("\rprimary {tracer:?}: run {run}/{}   ", args.runs);
+            let mut timer = GpuTimer::new(ctx, 4);
+            pass.run(ctx, scene, &camera, &gbuffer, Some(&mut timer))?;
+            if run > 0 {
+                times.push(timer.read(ctx)?.iter().map(|(_, ms)| ms).sum());
+            }
+        }
+        let counters = if args.no_counters {
+            None
+        } else {
+            PrimaryPass::new(ctx, tracer, args.vector.forced(), true)?
+                .run(ctx, scene, &camera, &gbuffer, None)?
+        };
+        out.push(PrimaryResult {
+            tracer: match tracer {
+                PrimaryTracer::Mft => "mft",
+                PrimaryTracer::PerRay => "per-ray",
+            }
+            .to_owned(),
+            primary_ms_min: times.iter().copied().fold(f64::INFINITY, f64::min),
+            primary_ms_median: median(&times),
+            primary_ms: times,
+            mft_speedup: f64::NAN,
+            counters,
+        });
+    }
+    eprint!("\r{:60}\r", "");
+    let mft = out[0].primary_ms_median;
+    for p in &mut out {
+        p.mft_speedup = p.primary_ms_median / mft;
+    }
+    Ok(out)
 }
 
 fn print_case(r: &CaseResult) {
@@ -468,6 +548,31 @@ fn print_case(r: &CaseResult) {
             c(|c| c.triangle_tests),
         );
     }
+    println!(
+        "  {:<8} {:>10} {:>10} {:>8} {:>9} {:>11} {:>11} {:>11} {:>11}",
+        "primary", "min ms", "median ms", "", "MFT is", "tris", "+culling", "AABB tests", "tri tests"
+    );
+    for p in &r.primary {
+        // Per-ray counts are single-ray tests; Table 1 compares 16-wide ones.
+        let scale = if p.tracer == "mft" { 1.0 } else { 16.0 };
+        let c = |f: fn(&Counters) -> u64| {
+            p.counters
+                .map_or("-".to_owned(), |c| format!("{:.0}K", f(&c) as f64 / scale / 1e3))
+        };
+        println!(
+            "  {:<8} {:>10.1} {:>10.1} {:>8} {:>8.2}x {:>11} {:>11} {:>11} {:>11}",
+            p.tracer,
+            p.primary_ms_min,
+            p.primary_ms_median,
+            "",
+            p.mft_speedup,
+            c(|c| c.triangles_accessed),
+            c(|c| c.triangles_after_culling),
+            c(|c| c.box_tests),
+            c(|c| c.triangle_tests),
+        );
+    }
+    println!("  (per-ray primary counts shown /16, as 16-wide equivalents)");
     if let Some(red) = &r.reductions_vs_packet {
         println!(
             "  packet/MFT: tris {:.2}x, +culling {:.2}x, AABB tests {:.2}x, triangle tests {:.2}x",

@@ -7,8 +7,8 @@ use penumbra::Result;
 use penumbra::bvh::Bvh;
 use penumbra::filter::FilterParams;
 use penumbra::gpu::{
-    FrameSettings, GpuContext, GpuOptions, GpuScene, LeafMode, Renderer, RendererOptions, Tracer,
-    VectorVariant,
+    FrameSettings, GpuContext, GpuOptions, GpuScene, LeafMode, PrimaryTracer, Renderer, RendererOptions,
+    Tracer, VectorVariant,
 };
 use penumbra::output::{FloatImage, HdrImage, ToneMap, write_float_image, write_image};
 use penumbra::reference::shadow::MASK_SKY;
@@ -61,6 +61,24 @@ impl From<LeafModeArg> for LeafMode {
         match arg {
             LeafModeArg::PerLane => LeafMode::PerLane,
             LeafModeArg::Transposed => LeafMode::Transposed,
+        }
+    }
+}
+
+/// `--primary` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum PrimaryArg {
+    /// One invocation per pixel with its own stack.
+    PerRay,
+    /// Multi-frusta: one 16-wide vector per 16x16 pixels.
+    Mft,
+}
+
+impl From<PrimaryArg> for PrimaryTracer {
+    fn from(arg: PrimaryArg) -> PrimaryTracer {
+        match arg {
+            PrimaryArg::PerRay => PrimaryTracer::PerRay,
+            PrimaryArg::Mft => PrimaryTracer::Mft,
         }
     }
 }
@@ -124,6 +142,10 @@ pub struct RenderArgs {
     /// How the shadow kernel spends its 16 lanes on a leaf triangle (same image either way).
     #[arg(long, value_enum, default_value_t = LeafMode::default().into())]
     leaf_mode: LeafModeArg,
+    /// Camera rays: per-ray (one invocation per pixel) or mft (16 frusta of 4x4 pixels
+    /// per 16-wide vector); the same G-buffer either way.
+    #[arg(long, value_enum, default_value_t = PrimaryArg::PerRay)]
+    primary: PrimaryArg,
     /// MFT: do not shrink frusta to their still-active rays after a leaf that blocked
     /// some (the paper's "CR" frustum shrinking, on by default; same image either way).
     #[arg(long)]
@@ -231,6 +253,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             tracer,
             counters: false,
             shrink: !args.no_shrink,
+            primary: args.primary.into(),
         },
     )?;
     if tracer.uses_vector() {

@@ -12,7 +12,7 @@
 
 use super::kernel::{Binding, Checks, Kernel, uniform_buffer};
 use super::{GpuContext, GpuScene, GpuTimer, VectorVariant, read_buffer};
-use crate::counters::{STATUS_WORDS, TraceCounters, WORD_STATUS};
+use crate::counters::{Counters, STATUS_WORDS, WORD_STATUS};
 use crate::layout::CameraParams;
 use crate::reference::primary_mft::{BLOCK, ITERATION_BUDGET};
 use crate::{Error, Result};
@@ -44,12 +44,12 @@ pub struct PrimaryStatus {
     /// Pixels whose rays ran out of loop iterations (their texels are incomplete).
     pub overflow_pixels: u32,
     /// The work counters, when the pass was built with counters on.
-    pub counters: Option<TraceCounters>,
+    pub counters: Option<Counters>,
 }
 
 impl PrimaryStatus {
     /// The counters, or an error when a ray ran out of loop iterations.
-    pub fn check(self) -> Result<Option<TraceCounters>> {
+    pub fn check(self) -> Result<Option<Counters>> {
         if self.overflow_pixels != 0 {
             return Err(Error::Gpu(format!(
                 "primary pass: the camera rays of {} pixels ran out of their loop iterations \
@@ -229,7 +229,7 @@ impl PrimaryPass {
             .map_err(|_| Error::Gpu("primary status: short read".into()))?;
         Ok(PrimaryStatus {
             overflow_pixels: words[WORD_STATUS],
-            counters: self.counters.then(|| TraceCounters::from_status(&words)),
+            counters: self.counters.then(|| Counters::from_status_words(&words)),
         })
     }
 
@@ -243,7 +243,7 @@ impl PrimaryPass {
         camera: &CameraParams,
         gbuffer: &wgpu::Buffer,
         timer: Option<&mut GpuTimer>,
-    ) -> Result<Option<TraceCounters>> {
+    ) -> Result<Option<Counters>> {
         let pixels = u64::from(camera.width) * u64::from(camera.height);
         if pixels == 0 || gbuffer.size() < pixels * size_of::<crate::layout::GBufferTexel>() as u64 {
             return Err(Error::Gpu(format!(

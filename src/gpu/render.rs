@@ -4,6 +4,7 @@
 use glam::Vec3;
 
 use super::kernel::{Binding, Checks, Kernel, uniform_buffer};
+use super::primary_pass::{PrimaryPass, PrimaryTracer};
 use super::shadow_tracer::{LeafMode, ShadowStats, ShadowTracer, Tracer, TracerOptions, VectorVariant};
 use super::{GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer, storage_buffer};
 use crate::filter::FilterParams;
@@ -67,6 +68,9 @@ pub struct Frame {
     pub timings: Vec<(String, f64)>,
     /// Dispatches and suspensions of the shadow pass.
     pub shadow_stats: ShadowStats,
+    /// Work counted by the primary kernel (zero unless built with
+    /// [`RendererOptions::counters`]).
+    pub primary_counters: crate::counters::Counters,
 }
 
 impl Frame {
@@ -103,6 +107,8 @@ pub struct RendererOptions {
     pub counters: bool,
     /// MFT frustum shrinking ([`TracerOptions::shrink`]; on by default).
     pub shrink: bool,
+    /// Which kernel traces the camera rays.
+    pub primary: PrimaryTracer,
 }
 
 impl Default for RendererOptions {
@@ -114,6 +120,7 @@ impl Default for RendererOptions {
             tracer: t.tracer,
             counters: t.counters,
             shrink: t.shrink,
+            primary: PrimaryTracer::default(),
         }
     }
 }
@@ -132,7 +139,7 @@ impl From<Option<VectorVariant>> for RendererOptions {
 /// The pipelines of the standalone frame.
 #[derive(Debug)]
 pub struct Renderer {
-    primary: Kernel,
+    primary: PrimaryPass,
     shadow: ShadowTracer,
     shade: Kernel,
     filter: Kernel,
@@ -145,17 +152,7 @@ impl Renderer {
         let options = options.into();
         use Binding::*;
         Ok(Renderer {
-            // Indices: BVH ranges validated by GpuScene::new, the stack index is clamped.
-            primary: Kernel::new(
-                ctx,
-                "primary",
-                &[],
-                &[
-                    Uniform, ReadOnly, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadWrite, ReadOnly, ReadOnly,
-                ],
-                &[],
-                Checks::Unchecked,
-            )?,
+            primary: PrimaryPass::new(ctx, options.primary, options.variant, options.counters)?,
             shadow: ShadowTracer::with_options(
                 ctx,
                 &TracerOptions {
@@ -190,6 +187,11 @@ impl Renderer {
     /// The shadow pass's vector variant.
     pub fn variant(&self) -> VectorVariant {
         self.shadow.variant
+    }
+
+    /// The primary (camera-ray) tracer.
+    pub fn primary_tracer(&self) -> PrimaryTracer {
+        self.primary.tracer()
     }
 
     /// The shadow tracer.
@@ -237,7 +239,7 @@ impl Renderer {
         let normal = empty_storage_buffer(ctx, "normals", pixels * 16, rw)?;
         let filtered = empty_storage_buffer(ctx, "filtered values", pixels * 16, rw)?;
         let brdf = empty_storage_buffer(ctx, "brdf", pixels * 16, rw)?;
-        let status = empty_storage_buffer(ctx, "primary status", 16, rw | wgpu::BufferUsages::COPY_DST)?;
+        let status = PrimaryPass::status_buffer(&ctx.device);
         let points = match self.shadow.tracer {
             Tracer::Reference { rays } => sampling::reference_light_points(&view.light, rays),
             _ => sampling::light_points(&view.light),
@@ -252,33 +254,25 @@ impl Renderer {
         let groups = (w.div_ceil(8), h.div_ceil(8));
         check_groups(ctx, groups)?;
 
+        let primary_groups = self.primary.workgroups(ctx, w, h)?;
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        {
-            let bind = self.primary.bind(
-                ctx,
-                &[
-                    &camera_buf,
-                    &scene.nodes,
-                    &scene.triangles,
-                    &scene.shading,
-                    &scene.materials,
-                    &gbuffer,
-                    &status,
-                    &scene.textures,
-                    &scene.texels,
-                ],
-            );
-            let writes = timer.pass_writes("primary");
-            self.primary
-                .record(&mut encoder, "primary", &bind, writes, groups);
-        }
+        let writes = timer.pass_writes("primary");
+        self.primary.record(
+            &ctx.device,
+            &mut encoder,
+            scene,
+            &camera_buf,
+            &gbuffer,
+            &status,
+            primary_groups,
+            writes,
+        );
         ctx.queue.submit([encoder.finish()]);
-        if read_buffer::<u32>(ctx, &status, 0..4)?[0] != 0 {
-            return Err(Error::Gpu(
-                "primary pass: a camera ray ran out of its loop iterations (BVH too deep or degenerate)"
-                    .into(),
-            ));
-        }
+        let primary_counters = self
+            .primary
+            .read_status(ctx, &status)?
+            .check()?
+            .unwrap_or_default();
 
         let shadow_stats = self.shadow.run(
             ctx,
@@ -342,6 +336,7 @@ impl Renderer {
             gbuffer,
             timings: timer.read(ctx)?,
             shadow_stats,
+            primary_counters,
         })
     }
 }

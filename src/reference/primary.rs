@@ -5,7 +5,7 @@ use glam::Vec3;
 
 use super::traverse::closest_hit_counted;
 use crate::bvh::Bvh;
-use crate::counters::TraceCounters;
+use crate::counters::Counters;
 use crate::frame::{ShadingData, camera_ray};
 use crate::layout::{CameraParams, GBufferTexel};
 use crate::reference::Hit;
@@ -61,9 +61,9 @@ pub fn primary_texel_counted(
     cam: &CameraParams,
     x: u32,
     y: u32,
-) -> (GBufferTexel, TraceCounters) {
+) -> (GBufferTexel, Counters) {
     let dir = camera_ray(cam, x, y);
-    let mut counters = TraceCounters::default();
+    let mut counters = Counters::default();
     // f32::MAX like the kernel's initial t_best (no hit can reach it anyway).
     let hit = closest_hit_counted(bvh, cam.eye, dir, f32::MAX, &mut counters);
     (hit_texel(bvh, shading, cam, dir, hit), counters)
@@ -85,12 +85,12 @@ pub fn primary_gbuffer_counted(
     bvh: &Bvh,
     shading: &ShadingData,
     cam: &CameraParams,
-) -> (Vec<GBufferTexel>, TraceCounters) {
+) -> (Vec<GBufferTexel>, Counters) {
     let w = cam.width as usize;
     let per_pixel = super::parallel::per_pixel(w, cam.height as usize, |p| {
         primary_texel_counted(bvh, shading, cam, (p % w) as u32, (p / w) as u32)
     });
-    let mut total = TraceCounters::default();
+    let mut total = Counters::default();
     let texels = per_pixel
         .into_iter()
         .map(|(texel, c)| {

@@ -17,7 +17,7 @@ use glam::Vec3;
 use super::primary::hit_texel;
 use super::{Hit, intersect_triangle};
 use crate::bvh::Bvh;
-use crate::counters::TraceCounters;
+use crate::counters::Counters;
 use crate::frame::{ShadingData, camera_ray};
 use crate::layout::{BvhNode, BvhTriangle, CameraParams, GBufferTexel};
 
@@ -211,7 +211,7 @@ pub fn trace_block(
     bx: u32,
     by: u32,
     budget: u32,
-    counters: &mut TraceCounters,
+    counters: &mut Counters,
 ) -> BlockResult {
     let mut frusta: [PixelFrustum; 16] = std::array::from_fn(|i| {
         PixelFrustum::new(
@@ -271,7 +271,7 @@ pub fn trace_block(
                 }
             }
         } else {
-            counters.traversal_steps += 1;
+            counters.nodes_visited += 1;
             counters.box_tests += 2;
             let l = bvh.nodes[node as usize].first;
             let (left, right) = (&bvh.nodes[l as usize], &bvh.nodes[l as usize + 1]);
@@ -316,7 +316,7 @@ pub struct MftPrimary {
     /// The G-buffer (row-major, row 0 at the top).
     pub gbuffer: Vec<GBufferTexel>,
     /// The work of all vectors, counted as the kernel counts it with `COUNTERS` on.
-    pub counters: TraceCounters,
+    pub counters: Counters,
     /// Pixels of vectors that ran out of their iteration budget (the kernel's status word 0).
     pub overflow_pixels: u64,
 }
@@ -328,12 +328,12 @@ pub fn primary_mft_gbuffer(bvh: &Bvh, shading: &ShadingData, cam: &CameraParams,
     let (bw, bh) = (cam.width.div_ceil(BLOCK), cam.height.div_ceil(BLOCK));
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let rows_per = (bh as usize).div_ceil(threads).max(1);
-    let results: Vec<(Vec<BlockResult>, TraceCounters)> = std::thread::scope(|s| {
+    let results: Vec<(Vec<BlockResult>, Counters)> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..bh)
             .step_by(rows_per)
             .map(|by0| {
                 s.spawn(move || {
-                    let mut counters = TraceCounters::default();
+                    let mut counters = Counters::default();
                     let mut blocks = Vec::new();
                     for by in by0..(by0 + rows_per as u32).min(bh) {
                         for bx in 0..bw {
@@ -351,7 +351,7 @@ pub fn primary_mft_gbuffer(bvh: &Bvh, shading: &ShadingData, cam: &CameraParams,
     });
     let mut out = MftPrimary {
         gbuffer: vec![GBufferTexel::default(); w * h],
-        counters: TraceCounters::default(),
+        counters: Counters::default(),
         overflow_pixels: 0,
     };
     for (blocks, counters) in results {
@@ -412,7 +412,7 @@ mod tests {
     /// Every pixel's hit equals the per-ray tracer's, ties of equal t aside.
     fn assert_hits_match(bvh: &Bvh, cam: &CameraParams) -> usize {
         let mut ties = 0;
-        let mut counters = TraceCounters::default();
+        let mut counters = Counters::default();
         for by in 0..cam.height.div_ceil(BLOCK) {
             for bx in 0..cam.width.div_ceil(BLOCK) {
                 let block = trace_block(bvh, cam, bx, by, u32::MAX, &mut counters);
@@ -460,7 +460,7 @@ mod tests {
         // Each vector that sees the soup needs more than 3 steps; its pixels are all counted.
         let per_block: Vec<bool> = (0..2)
             .flat_map(|by| (0..3).map(move |bx| (bx, by)))
-            .map(|(bx, by)| trace_block(&bvh, &cam, bx, by, 3, &mut TraceCounters::default()).overflow)
+            .map(|(bx, by)| trace_block(&bvh, &cam, bx, by, 3, &mut Counters::default()).overflow)
             .collect();
         let pixels = |(bx, by): (u32, u32)| u64::from((37 - bx * 16).min(16) * (23 - by * 16).min(16));
         let expected: u64 = (0..6)
@@ -469,6 +469,6 @@ mod tests {
             .sum();
         assert!(expected > 37 * 23 / 2, "most blocks overflow: {per_block:?}");
         assert_eq!(cut.overflow_pixels, expected);
-        assert!(cut.counters.traversal_steps < full.counters.traversal_steps);
+        assert!(cut.counters.nodes_visited < full.counters.nodes_visited);
     }
 }

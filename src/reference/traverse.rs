@@ -5,7 +5,7 @@ use glam::Vec3;
 
 use super::intersect::{RayBox, intersect_box, intersect_triangle, safe_inverse};
 use crate::bvh::Bvh;
-use crate::counters::TraceCounters;
+use crate::counters::Counters;
 
 /// The nearest intersection along a ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,7 +23,7 @@ pub struct Hit {
 /// The nearest hit with `0 < t < t_max`, or `None`. Children are visited
 /// nearer-first; a box farther than the best hit so far is skipped.
 pub fn closest_hit(bvh: &Bvh, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
-    closest_hit_counted(bvh, origin, dir, t_max, &mut TraceCounters::default())
+    closest_hit_counted(bvh, origin, dir, t_max, &mut Counters::default())
 }
 
 /// [`closest_hit`], adding its work to `counters` as the per-ray primary
@@ -34,7 +34,7 @@ pub fn closest_hit_counted(
     origin: Vec3,
     dir: Vec3,
     t_max: f32,
-    counters: &mut TraceCounters,
+    counters: &mut Counters,
 ) -> Option<Hit> {
     let ray = RayBox {
         origin,
@@ -67,7 +67,7 @@ pub fn closest_hit_counted(
             }
             continue;
         }
-        counters.traversal_steps += 1;
+        counters.nodes_visited += 1;
         counters.box_tests += 2;
         let (l, r) = (node.first, node.first + 1);
         let tl = intersect_box(&ray, &bvh.nodes[l as usize], t_best);
