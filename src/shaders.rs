@@ -26,6 +26,14 @@ use naga::valid::{Capabilities, ValidationFlags, Validator};
 /// in [`KERNELS`] if it has an entry point. A test checks that this table and the folder agree.
 pub static SOURCES: &[(&str, &str)] = &[
     ("filter", include_str!("../shaders/filter.wgsl")),
+    (
+        "gbuffer_from_depth",
+        include_str!("../shaders/gbuffer_from_depth.wgsl"),
+    ),
+    (
+        "gbuffer_from_position",
+        include_str!("../shaders/gbuffer_from_position.wgsl"),
+    ),
     ("gpu_selftest", include_str!("../shaders/gpu_selftest.wgsl")),
     ("primary", include_str!("../shaders/primary.wgsl")),
     ("shade", include_str!("../shaders/shade.wgsl")),
@@ -36,6 +44,7 @@ pub static SOURCES: &[(&str, &str)] = &[
         "shared/intersect",
         include_str!("../shaders/shared/intersect.wgsl"),
     ),
+    ("shared/surface", include_str!("../shaders/shared/surface.wgsl")),
     (
         "shared/vec16_subgroup",
         include_str!("../shaders/shared/vec16_subgroup.wgsl"),
@@ -43,6 +52,14 @@ pub static SOURCES: &[(&str, &str)] = &[
     (
         "shared/vec16_workgroup",
         include_str!("../shaders/shared/vec16_workgroup.wgsl"),
+    ),
+    (
+        "visibility_to_texture",
+        include_str!("../shaders/visibility_to_texture.wgsl"),
+    ),
+    (
+        "visibility_values",
+        include_str!("../shaders/visibility_values.wgsl"),
     ),
 ];
 
@@ -53,6 +70,8 @@ pub type Aliases<'a> = &'a [(&'a str, &'a str)];
 /// `cargo test` assembles and validates each one. A kernel without variants has one empty set.
 pub const KERNELS: &[(&str, &[Aliases<'static>])] = &[
     ("filter", &[&[]]),
+    ("gbuffer_from_depth", &[&[]]),
+    ("gbuffer_from_position", &[&[]]),
     ("gpu_selftest", &[&[]]),
     ("primary", &[&[]]),
     ("shade", &[&[]]),
@@ -63,6 +82,8 @@ pub const KERNELS: &[(&str, &[Aliases<'static>])] = &[
             &[("shared/vec16", "shared/vec16_workgroup")],
         ],
     ),
+    ("visibility_to_texture", &[&[]]),
+    ("visibility_values", &[&[]]),
 ];
 
 /// What [`validate`] allows beyond core WGSL: exactly what [`crate::gpu::GpuContext`] may

@@ -5,9 +5,13 @@
 //! one found (Vulkan first, so lavapipe serves machines without a GPU). Everything that can
 //! fail for reasons outside the caller's control returns [`crate::Error`] instead of
 //! panicking: a missing driver, a buffer over the adapter's limit, a failed mapping.
+//!
+//! An application with its own device embeds the shadow pass through [`embed`]
+//! ([`ShadowPass`]).
 
 mod buffers;
 mod context;
+pub mod embed;
 pub mod kernel;
 pub mod render;
 mod scene_buffers;
@@ -16,6 +20,7 @@ mod timer;
 
 pub use buffers::{empty_storage_buffer, read_buffer, storage_buffer};
 pub use context::{ADAPTER_ENV, AdapterSummary, GpuContext, GpuOptions};
+pub use embed::{ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, Surface, VISIBILITY_FORMAT};
 pub use render::{Frame, FrameSettings, Renderer, RendererOptions};
 pub use scene_buffers::{GpuScene, validate_for_gpu};
 pub use shadow_tracer::{LeafMode, ShadowScratch, ShadowStats, ShadowTracer, VectorVariant};

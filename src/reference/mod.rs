@@ -2,7 +2,8 @@
 //! BVH, reading exactly the data the GPU reads ([`BvhNode`](crate::layout::BvhNode)s
 //! and [`BvhTriangle`](crate::layout::BvhTriangle)s in leaf order) with the same
 //! intersection arithmetic, the per-ray shadow oracle, and the CPU twin of the
-//! multi-frusta shadow kernel. They are the oracles for the GPU kernels.
+//! multi-frusta shadow kernel, and the twin of the embedded pass's G-buffer kernels.
+//! They are the oracles for the GPU kernels.
 
 mod intersect;
 pub mod mft;
@@ -10,6 +11,7 @@ mod parallel;
 pub mod primary;
 pub mod shade;
 pub mod shadow;
+pub mod surface;
 mod traverse;
 
 pub use intersect::{RayBox, intersect_box, intersect_triangle, safe_inverse};
