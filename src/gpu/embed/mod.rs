@@ -59,7 +59,7 @@ use super::{GpuContext, GpuScene, LeafMode, ShadowTracer, VectorVariant};
 use crate::filter::FilterParams;
 use crate::frame::RAY_OFFSET_FRACTION;
 use crate::layout::{ImageSize, SurfaceParams};
-use crate::reference::shadow::shadow_params;
+use crate::reference::shadow::{ITERATION_BUDGET, shadow_params};
 use crate::{Error, Result, sampling};
 
 /// Workgroups are 8×8 pixels in the per-pixel kernels.
@@ -87,6 +87,12 @@ pub struct ShadowSettings {
     /// [`ShadowTargets::unfinished_tiles`] reports. The default, 4, finishes the shipped
     /// scenes at any image size on lavapipe.
     pub resume_rounds: u32,
+    /// Loop iterations a tile's vector may run in one dispatch before it saves its state
+    /// and waits for the next round. The default, [`ITERATION_BUDGET`] (60,000), stays
+    /// below lavapipe's limit of 65,535 per invocation; a device without such a limit may
+    /// raise it (fewer rounds needed), a host that wants short dispatches may lower it
+    /// (more rounds needed).
+    pub iteration_budget: u32,
 }
 
 impl Default for ShadowSettings {
@@ -99,6 +105,7 @@ impl Default for ShadowSettings {
             variant: None,
             leaf_mode: LeafMode::default(),
             resume_rounds: 4,
+            iteration_budget: ITERATION_BUDGET,
         }
     }
 }
@@ -288,6 +295,8 @@ impl ShadowPass {
         kernel.record(encoder, "embed/gbuffer", &bind, None, groups);
 
         let light_points = light_points_buffer(device, inputs.light);
+        let mut shadow = shadow_params(inputs.light, w, h);
+        shadow.iteration_budget = self.settings.iteration_budget.max(1);
         self.tracer.record(
             device,
             encoder,
@@ -296,7 +305,7 @@ impl ShadowPass {
             &light_points,
             &targets.masks,
             &targets.scratch,
-            &shadow_params(inputs.light, w, h),
+            &shadow,
             self.settings.resume_rounds,
         );
 
@@ -402,5 +411,18 @@ fn check_device(device: &wgpu::Device, settings: &ShadowSettings) -> Result<()> 
             what: "the embedded shadow pass".to_owned(),
             missing,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_webgpu_device_meets_the_requirements_and_downlevel_ones_do_not() {
+        let required = ShadowPass::required_limits();
+        assert!(required.check_limits(&wgpu::Limits::default()));
+        assert!(!required.check_limits(&wgpu::Limits::downlevel_defaults()));
+        assert!(ShadowPass::required_features().is_empty());
     }
 }
