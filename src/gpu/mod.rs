@@ -9,10 +9,12 @@
 //! An application with its own device embeds the shadow pass through [`embed`]
 //! ([`ShadowPass`]).
 
+pub mod animate;
 mod buffers;
 mod context;
 pub mod embed;
 pub mod kernel;
+mod motion;
 pub mod render;
 mod scene_buffers;
 pub mod shadow_tracer;
@@ -21,6 +23,7 @@ mod timer;
 pub use buffers::{empty_storage_buffer, read_buffer, storage_buffer};
 pub use context::{ADAPTER_ENV, AdapterSummary, GpuContext, GpuOptions};
 pub use embed::{ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, Surface, VISIBILITY_FORMAT};
+pub use motion::{MotionSettings, MotionUpdate};
 pub use render::{Frame, FrameSettings, Renderer, RendererOptions};
 pub use scene_buffers::{GpuScene, validate_for_gpu};
 pub use shadow_tracer::{LeafMode, ShadowScratch, ShadowStats, ShadowTracer, VectorVariant};

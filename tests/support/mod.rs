@@ -4,6 +4,7 @@
 
 use glam::Vec3;
 
+pub mod bvh;
 pub mod gpu;
 
 /// PCG32 (O'Neill): small, deterministic, good enough for test inputs.
