@@ -16,7 +16,7 @@ use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::filter::{FilterParams, discontinuity_filter};
 use penumbra::gpu::{
     FrameSettings, GpuContext, GpuScene, Renderer, ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets,
-    Surface, VectorVariant, read_buffer,
+    SurfaceInput, VectorVariant, read_buffer,
 };
 use penumbra::layout::GBufferTexel;
 use penumbra::reference::shadow::visibility;
@@ -89,12 +89,12 @@ fn embedded_frame(
         positions,
     );
     let surface = if positions {
-        Surface::Position {
+        SurfaceInput::Position {
             texture: &host.position,
             eye: view.camera.eye,
         }
     } else {
-        Surface::Depth {
+        SurfaceInput::Depth {
             texture: &host.depth,
             view: view_matrix,
             projection,
@@ -351,7 +351,7 @@ fn bad_input_textures_are_refused_with_a_clear_error() {
     ];
     for (normal, expected) in &cases {
         let inputs = ShadowInputs {
-            surface: Surface::Position {
+            surface: SurfaceInput::Position {
                 texture: &host.position,
                 eye: view.camera.eye,
             },

@@ -17,7 +17,9 @@ use std::time::Instant;
 
 use glam::Mat4;
 use penumbra::bvh::{Bvh, BvhSettings};
-use penumbra::gpu::{GpuContext, GpuScene, ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, Surface};
+use penumbra::gpu::{
+    GpuContext, GpuScene, ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, SurfaceInput,
+};
 use penumbra::output::{HdrImage, ToneMap, write_image};
 use penumbra::scene::Scene;
 use penumbra::{assets, view::QuadLight};
@@ -112,7 +114,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut encoder = device.create_command_encoder(&Default::default());
     rasterizer.record(&device, &mut encoder, projection * view_matrix, &gbuffer, false);
     let inputs = ShadowInputs {
-        surface: Surface::Depth {
+        surface: SurfaceInput::Depth {
             texture: &gbuffer.depth,
             view: view_matrix,
             projection,

@@ -22,7 +22,7 @@ mod timer;
 
 pub use buffers::{empty_storage_buffer, read_buffer, storage_buffer};
 pub use context::{ADAPTER_ENV, AdapterSummary, GpuContext, GpuOptions};
-pub use embed::{ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, Surface, VISIBILITY_FORMAT};
+pub use embed::{ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, SurfaceInput, VISIBILITY_FORMAT};
 pub use motion::{MotionSettings, MotionUpdate};
 pub use render::{Frame, FrameSettings, Renderer, RendererOptions};
 pub use scene_buffers::{GpuScene, validate_for_gpu};

@@ -7,7 +7,7 @@ use crate::{Error, Result};
 
 /// Where the surface seen by each pixel is, in one of two forms.
 #[derive(Clone, Copy, Debug)]
-pub enum Surface<'a> {
+pub enum SurfaceInput<'a> {
     /// The host's depth buffer and the camera that rendered it. Each pixel's world
     /// position is its centre `(x + ½, y + ½)` at the stored depth, unprojected with
     /// `(projection × view)⁻¹`; texels equal to `background_depth` see no geometry.
@@ -18,7 +18,7 @@ pub enum Surface<'a> {
     /// reconstructed point along the view ray: measured up to 1.1 mm at 11 m with
     /// `Depth32Float` and the near plane at 3.5 cm (the default scene's ray offset is
     /// 1.7 mm), against 0.02 mm from a position texture; a farther near plane or reversed
-    /// Z shrinks it. Prefer [`Surface::Position`] where that matters.
+    /// Z shrinks it. Prefer [`SurfaceInput::Position`] where that matters.
     Depth {
         /// The depth texture.
         texture: &'a wgpu::Texture,
@@ -49,7 +49,7 @@ pub enum Surface<'a> {
 #[derive(Clone, Copy, Debug)]
 pub struct ShadowInputs<'a> {
     /// Where each pixel's surface is.
-    pub surface: Surface<'a>,
+    pub surface: SurfaceInput<'a>,
     /// World-space shading normals in xyz (any length, either side: they are normalized
     /// and turned towards the camera). Any float or normalized format read unfiltered,
     /// e.g. `Rgba16Float` or `Rgba8Snorm` (not `Rgba8Unorm`: normals are signed).
@@ -67,11 +67,11 @@ pub struct ShadowInputs<'a> {
 }
 
 impl ShadowInputs<'_> {
-    /// The eye position and the clip-to-world matrix (identity for [`Surface::Position`]).
+    /// The eye position and the clip-to-world matrix (identity for [`SurfaceInput::Position`]).
     pub(super) fn camera(&self) -> Result<(Vec3, Mat4)> {
         match self.surface {
-            Surface::Position { eye, .. } => Ok((eye, Mat4::IDENTITY)),
-            Surface::Depth { view, projection, .. } => {
+            SurfaceInput::Position { eye, .. } => Ok((eye, Mat4::IDENTITY)),
+            SurfaceInput::Depth { view, projection, .. } => {
                 // In f64, rounded once: the w row of (P·V)⁻¹ nearly cancels against depths
                 // close to 1, so the matrix should add no rounding of its own.
                 let clip_to_world = (projection.as_dmat4() * view.as_dmat4()).inverse().as_mat4();
@@ -90,7 +90,7 @@ impl ShadowInputs<'_> {
     /// Checks every texture against what the kernels bind, for a `width`×`height` frame.
     pub(super) fn check(&self, width: u32, height: u32) -> Result<()> {
         match self.surface {
-            Surface::Depth { texture, .. } => {
+            SurfaceInput::Depth { texture, .. } => {
                 check_texture("ShadowInputs::surface (depth)", texture, width, height)?;
                 if !texture.format().has_depth_aspect() {
                     return Err(Error::invalid(
@@ -99,7 +99,7 @@ impl ShadowInputs<'_> {
                     ));
                 }
             }
-            Surface::Position { texture, .. } => {
+            SurfaceInput::Position { texture, .. } => {
                 check_float_texture("ShadowInputs::surface (position)", texture, width, height)?;
             }
         }

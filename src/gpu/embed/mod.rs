@@ -16,7 +16,7 @@
 //! pass can serve several scenes (the scene is an argument of `record`).
 //!
 //! ```no_run
-//! use penumbra::gpu::{GpuContext, GpuScene, ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, Surface};
+//! use penumbra::gpu::{GpuContext, GpuScene, ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, SurfaceInput};
 //! use penumbra::{assets, bvh::{Bvh, BvhSettings}, scene::Scene};
 //! # fn frame(device: &wgpu::Device, queue: &wgpu::Queue, depth: &wgpu::Texture,
 //! #          normals: &wgpu::Texture, view: glam::Mat4, projection: glam::Mat4) -> penumbra::Result<()> {
@@ -33,7 +33,7 @@
 //! // ... the host renders `depth` and `normals` here ...
 //! let light = default.view().light;
 //! let inputs = ShadowInputs {
-//!     surface: Surface::Depth { texture: depth, view, projection, background_depth: 1.0 },
+//!     surface: SurfaceInput::Depth { texture: depth, view, projection, background_depth: 1.0 },
 //!     normal: normals,
 //!     geometric_normal: None,
 //!     light: &light,
@@ -49,7 +49,7 @@
 mod inputs;
 mod targets;
 
-pub use inputs::{ShadowInputs, Surface};
+pub use inputs::{ShadowInputs, SurfaceInput};
 pub use targets::{ShadowTargets, VISIBILITY_FORMAT};
 
 use glam::Vec3;
@@ -249,7 +249,7 @@ impl ShadowPass {
         let device = &self.device;
 
         let (kernel, surface_view, background_depth) = match inputs.surface {
-            Surface::Depth {
+            SurfaceInput::Depth {
                 texture,
                 background_depth,
                 ..
@@ -261,7 +261,7 @@ impl ShadowPass {
                 }),
                 background_depth,
             ),
-            Surface::Position { texture, .. } => {
+            SurfaceInput::Position { texture, .. } => {
                 (&self.from_position, texture.create_view(&Default::default()), 0.0)
             }
         };
