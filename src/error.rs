@@ -76,6 +76,29 @@ pub enum Error {
         /// The adapter's limit.
         limit: u64,
     },
+    /// A host's device lacks features or limits that a pass needs (see
+    /// [`crate::gpu::ShadowPass::required_features`] and
+    /// [`crate::gpu::ShadowPass::required_limits`]).
+    #[error(
+        "the GPU device cannot run {what}: it lacks {}; create the device with at least \
+         ShadowPass::required_features() and ShadowPass::required_limits()",
+        missing.join(", ")
+    )]
+    DeviceUnsupported {
+        /// The pass that cannot run, e.g. `the embedded shadow pass`.
+        what: String,
+        /// Each missing feature or too-small limit, e.g. `max_storage_buffers_per_shader_stage 4 (needs 7)`.
+        missing: Vec<String>,
+    },
+    /// Something a caller passed in does not fit the call: a texture of the wrong size,
+    /// format or usage, an instance index that does not exist.
+    #[error("{what}: {message}")]
+    InvalidInput {
+        /// The call or argument, e.g. `ShadowInputs::normal`.
+        what: String,
+        /// What is wrong, in words.
+        message: String,
+    },
     /// Any other GPU failure: a validation error, a failed buffer mapping, a lost device.
     #[error("GPU error: {0}")]
     Gpu(String),
@@ -125,6 +148,14 @@ impl Error {
     pub fn scene(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
         Error::Scene {
             path: path.into(),
+            message: message.into(),
+        }
+    }
+
+    /// An [`Error::InvalidInput`] about `what`.
+    pub fn invalid(what: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::InvalidInput {
+            what: what.into(),
             message: message.into(),
         }
     }

@@ -70,6 +70,10 @@ pub struct GBufferTexel {
 }
 
 impl GBufferTexel {
+    /// [`GBufferTexel::triangle`] of a texel made from a host's rasterized G-buffer
+    /// ([`crate::gpu::ShadowPass`]): a hit whose triangle is not known.
+    pub const UNKNOWN_TRIANGLE: u32 = u32::MAX - 1;
+
     /// True when the camera ray hit geometry.
     pub fn is_hit(&self) -> bool {
         self.depth > 0.0
@@ -204,6 +208,46 @@ pub struct ShadeParams {
     pub height: u32,
 }
 
+/// How the embedded shadow pass reads a host's G-buffer textures, 96 bytes
+/// (WGSL `SurfaceParams` in `shaders/shared/surface.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SurfaceParams {
+    /// Inverse of the host's `projection × view`, columns (bytes 0..64): takes
+    /// `(ndc_x, ndc_y, depth, 1)` back to homogeneous world space.
+    pub clip_to_world: [[f32; 4]; 4],
+    /// Camera position, world space (bytes 64..76).
+    pub eye: Vec3,
+    /// Distance by which shadow-ray origins leave the surface (bytes 76..80).
+    pub ray_offset: f32,
+    /// Image width in pixels (bytes 80..84).
+    pub width: u32,
+    /// Image height in pixels (bytes 84..88).
+    pub height: u32,
+    /// Depth texels equal to this value see no geometry: the depth buffer's clear value,
+    /// 1 for a standard projection, 0 for reversed Z (bytes 88..92).
+    pub background_depth: f32,
+    /// 1: the geometric-normal binding holds the host's geometric normals; 0: it repeats
+    /// the shading normals, which then serve as geometric normals too (bytes 92..96).
+    pub has_geo_normal: u32,
+}
+
+/// An image size for the per-pixel kernels, 16 bytes (WGSL `ImageSize`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ImageSize {
+    /// Width in pixels (bytes 0..4).
+    pub width: u32,
+    /// Height in pixels (bytes 4..8).
+    pub height: u32,
+    /// Unused (bytes 8..12).
+    pub pad0: u32,
+    /// Unused (bytes 12..16).
+    pub pad1: u32,
+}
+
+const _: () = assert!(size_of::<SurfaceParams>() == 96);
+const _: () = assert!(size_of::<ImageSize>() == 16);
 const _: () = assert!(size_of::<ShadeParams>() == 48);
 const _: () = assert!(size_of::<ShadingTriangle>() == 80);
 const _: () = assert!(size_of::<GpuTexture>() == 16);
@@ -225,6 +269,9 @@ impl BvhNode {
 pub const BVH_WGSL: &str = include_str!("../shaders/shared/bvh.wgsl");
 /// WGSL source of the per-frame structs (G-buffer, shadow parameters).
 pub const FRAME_WGSL: &str = include_str!("../shaders/shared/frame.wgsl");
+/// WGSL source of the embedded pass's structs; it imports [`FRAME_WGSL`], so the
+/// layout tests parse the two together.
+pub const SURFACE_WGSL: &str = include_str!("../shaders/shared/surface.wgsl");
 
 #[cfg(test)]
 mod tests {
@@ -419,6 +466,43 @@ mod tests {
                 radiance,
                 height
             }),
+        );
+    }
+
+    #[test]
+    fn surface_layouts_match_wgsl() {
+        let source = crate::shaders::assemble("shared/surface", &[]).expect("surface module assembles");
+        check(
+            &source,
+            "SurfaceParams",
+            size_of::<SurfaceParams>(),
+            fields!(SurfaceParams {
+                clip_to_world,
+                eye,
+                ray_offset,
+                width,
+                height,
+                background_depth,
+                has_geo_normal
+            }),
+        );
+        check(
+            &source,
+            "ImageSize",
+            size_of::<ImageSize>(),
+            fields!(ImageSize {
+                width,
+                height,
+                pad0,
+                pad1
+            }),
+        );
+        assert!(
+            source.contains(&format!(
+                "UNKNOWN_TRIANGLE: u32 = {:#x}u",
+                GBufferTexel::UNKNOWN_TRIANGLE
+            )),
+            "WGSL UNKNOWN_TRIANGLE differs from GBufferTexel::UNKNOWN_TRIANGLE"
         );
     }
 

@@ -6,6 +6,10 @@
 //! in leaf order, and [`reference`] traces rays over exactly the data the GPU
 //! reads (it is the oracle for every GPU kernel).
 //!
+//! On the GPU, [`gpu::Renderer`] renders whole frames; an application with its own wgpu
+//! device adds the soft shadows to its frame with [`gpu::ShadowPass`] (see [`gpu::embed`]
+//! and `examples/embed.rs`), and moves objects with [`gpu::GpuScene::set_transforms`].
+//!
 //! ```
 //! use penumbra::{assets, bvh::{Bvh, BvhSettings}, reference, scene::Scene};
 //! use glam::Vec3;

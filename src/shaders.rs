@@ -26,6 +26,14 @@ use naga::valid::{Capabilities, ValidationFlags, Validator};
 /// in [`KERNELS`] if it has an entry point. A test checks that this table and the folder agree.
 pub static SOURCES: &[(&str, &str)] = &[
     ("filter", include_str!("../shaders/filter.wgsl")),
+    (
+        "gbuffer_from_depth",
+        include_str!("../shaders/gbuffer_from_depth.wgsl"),
+    ),
+    (
+        "gbuffer_from_position",
+        include_str!("../shaders/gbuffer_from_position.wgsl"),
+    ),
     ("gpu_selftest", include_str!("../shaders/gpu_selftest.wgsl")),
     ("primary", include_str!("../shaders/primary.wgsl")),
     ("primary_mft", include_str!("../shaders/primary_mft.wgsl")),
@@ -41,6 +49,7 @@ pub static SOURCES: &[(&str, &str)] = &[
         include_str!("../shaders/shared/intersect.wgsl"),
     ),
     ("shared/primary", include_str!("../shaders/shared/primary.wgsl")),
+    ("shared/surface", include_str!("../shaders/shared/surface.wgsl")),
     (
         "shared/vec16_subgroup",
         include_str!("../shaders/shared/vec16_subgroup.wgsl"),
@@ -48,6 +57,14 @@ pub static SOURCES: &[(&str, &str)] = &[
     (
         "shared/vec16_workgroup",
         include_str!("../shaders/shared/vec16_workgroup.wgsl"),
+    ),
+    (
+        "visibility_to_texture",
+        include_str!("../shaders/visibility_to_texture.wgsl"),
+    ),
+    (
+        "visibility_values",
+        include_str!("../shaders/visibility_values.wgsl"),
     ),
 ];
 
@@ -58,6 +75,8 @@ pub type Aliases<'a> = &'a [(&'a str, &'a str)];
 /// `cargo test` assembles and validates each one. A kernel without variants has one empty set.
 pub const KERNELS: &[(&str, &[Aliases<'static>])] = &[
     ("filter", &[&[]]),
+    ("gbuffer_from_depth", &[&[]]),
+    ("gbuffer_from_position", &[&[]]),
     ("gpu_selftest", &[&[]]),
     ("primary", &[&[]]),
     (
@@ -83,6 +102,8 @@ pub const KERNELS: &[(&str, &[Aliases<'static>])] = &[
         ],
     ),
     ("shadow_per_ray", &[&[]]),
+    ("visibility_to_texture", &[&[]]),
+    ("visibility_values", &[&[]]),
 ];
 
 /// What [`validate`] allows beyond core WGSL: exactly what [`crate::gpu::GpuContext`] may

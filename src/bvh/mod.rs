@@ -3,10 +3,12 @@
 //! GPU reads leaves contiguously with no index indirection.
 
 mod build;
+mod refit;
 mod stats;
 
 use std::time::Duration;
 
+pub use refit::{MERGE_GAP_BYTES, Refit, ranges};
 pub use stats::BvhStats;
 
 use crate::Result;

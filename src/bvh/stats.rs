@@ -25,7 +25,8 @@ pub struct BvhStats {
     pub gpu_bytes: usize,
 }
 
-fn half_area(n: &BvhNode) -> f64 {
+/// Half the surface area of a node's box (0 for an empty box).
+pub(super) fn half_area(n: &BvhNode) -> f64 {
     let d = (n.bmax - n.bmin).max(glam::Vec3::ZERO).as_dvec3();
     d.x * d.y + d.y * d.z + d.z * d.x
 }

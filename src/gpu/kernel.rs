@@ -14,6 +14,40 @@ pub enum Binding {
     ReadOnly,
     /// `var<storage, read_write>`.
     ReadWrite,
+    /// `texture_depth_2d`, read with `textureLoad` (any depth format, single-sampled).
+    DepthTexture,
+    /// `texture_2d<f32>`, read with `textureLoad` (unfilterable float: any float or
+    /// normalized colour format, `Rgba32Float` included).
+    FloatTexture,
+    /// `texture_storage_2d<FORMAT, write>`.
+    StorageTexture(wgpu::TextureFormat),
+}
+
+impl Binding {
+    fn layout_type(self) -> wgpu::BindingType {
+        let buffer = |ty| wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        };
+        let texture = |sample_type| wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        };
+        match self {
+            Binding::Uniform => buffer(wgpu::BufferBindingType::Uniform),
+            Binding::ReadOnly => buffer(wgpu::BufferBindingType::Storage { read_only: true }),
+            Binding::ReadWrite => buffer(wgpu::BufferBindingType::Storage { read_only: false }),
+            Binding::DepthTexture => texture(wgpu::TextureSampleType::Depth),
+            Binding::FloatTexture => texture(wgpu::TextureSampleType::Float { filterable: false }),
+            Binding::StorageTexture(format) => wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::WriteOnly,
+                format,
+                view_dimension: wgpu::TextureViewDimension::D2,
+            },
+        }
+    }
 }
 
 /// A compute pipeline for entry point `main` and the layout of its group 0.
@@ -71,15 +105,7 @@ impl Kernel {
                 .map(|(i, b)| wgpu::BindGroupLayoutEntry {
                     binding: i as u32,
                     visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: match b {
-                            Binding::Uniform => wgpu::BufferBindingType::Uniform,
-                            Binding::ReadOnly => wgpu::BufferBindingType::Storage { read_only: true },
-                            Binding::ReadWrite => wgpu::BufferBindingType::Storage { read_only: false },
-                        },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
+                    ty: b.layout_type(),
                     count: None,
                 })
                 .collect();
@@ -124,12 +150,22 @@ impl Kernel {
 
     /// [`Kernel::bind`] on a bare device (for passes recorded into a host's encoder).
     pub fn bind_on(&self, device: &wgpu::Device, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
-        let entries: Vec<wgpu::BindGroupEntry> = buffers
-            .iter()
+        let resources: Vec<wgpu::BindingResource> = buffers.iter().map(|b| b.as_entire_binding()).collect();
+        self.bind_resources(device, resources)
+    }
+
+    /// A bind group with `resources[i]` at binding `i`, for kernels that bind textures.
+    pub fn bind_resources(
+        &self,
+        device: &wgpu::Device,
+        resources: Vec<wgpu::BindingResource<'_>>,
+    ) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = resources
+            .into_iter()
             .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
+            .map(|(i, resource)| wgpu::BindGroupEntry {
                 binding: i as u32,
-                resource: b.as_entire_binding(),
+                resource,
             })
             .collect();
         device.create_bind_group(&wgpu::BindGroupDescriptor {

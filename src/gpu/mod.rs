@@ -5,11 +5,17 @@
 //! one found (Vulkan first, so lavapipe serves machines without a GPU). Everything that can
 //! fail for reasons outside the caller's control returns [`crate::Error`] instead of
 //! panicking: a missing driver, a buffer over the adapter's limit, a failed mapping.
+//!
+//! An application with its own device embeds the shadow pass through [`embed`]
+//! ([`ShadowPass`]).
 
+pub mod animate;
 mod buffers;
 mod context;
+pub mod embed;
 pub mod kernel;
 pub mod primary_pass;
+mod motion;
 pub mod render;
 mod scene_buffers;
 pub mod shadow_tracer;
@@ -19,6 +25,8 @@ mod tracer;
 pub use buffers::{empty_storage_buffer, read_buffer, storage_buffer};
 pub use context::{ADAPTER_ENV, AdapterSummary, GpuContext, GpuOptions};
 pub use primary_pass::{PrimaryPass, PrimaryStatus, PrimaryTracer};
+pub use embed::{ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, SurfaceInput, VISIBILITY_FORMAT};
+pub use motion::{MotionSettings, MotionUpdate};
 pub use render::{Frame, FrameSettings, Renderer, RendererOptions};
 pub use scene_buffers::{GpuScene, validate_for_gpu};
 pub use shadow_tracer::{LeafMode, ShadowScratch, ShadowStats, ShadowTracer, TracerOptions, VectorVariant};

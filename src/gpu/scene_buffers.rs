@@ -1,4 +1,5 @@
-//! The scene on the GPU: BVH nodes, triangles, shading data and materials.
+//! The scene on the GPU: BVH nodes, triangles, shading data and materials
+//! (moving objects: `motion.rs`).
 
 use super::{GpuContext, storage_buffer};
 use crate::bvh::Bvh;
@@ -24,6 +25,8 @@ pub struct GpuScene {
     pub texels: wgpu::Buffer,
     /// Length of the scene's bounding-box diagonal (for relative offsets).
     pub diagonal: f32,
+    /// The CPU copy that moving objects need ([`GpuScene::with_motion`]).
+    pub(super) motion: Option<Box<super::motion::Motion>>,
 }
 
 /// Checks what the unchecked kernels index with: every child pair and every
@@ -67,6 +70,7 @@ impl GpuScene {
             textures: storage_buffer(ctx, "textures", &shading.textures, usage)?,
             texels: storage_buffer(ctx, "texels", &shading.texels, usage)?,
             diagonal: scene.bounds().diagonal(),
+            motion: None,
         })
     }
 }

@@ -2,7 +2,8 @@
 //! BVH, reading exactly the data the GPU reads ([`BvhNode`](crate::layout::BvhNode)s
 //! and [`BvhTriangle`](crate::layout::BvhTriangle)s in leaf order) with the same
 //! intersection arithmetic, the per-ray shadow oracle, and the CPU twin of the
-//! multi-frusta shadow kernel and of the primary kernels. They are the oracles for the GPU kernels.
+//! multi-frusta shadow kernel and of the primary kernels, and the twin of the embedded
+//! pass's G-buffer kernels. They are the oracles for the GPU kernels.
 
 pub mod counters;
 pub mod exact;
@@ -15,6 +16,7 @@ pub mod primary;
 pub mod primary_mft;
 pub mod shade;
 pub mod shadow;
+pub mod surface;
 mod traverse;
 
 pub use intersect::{RayBox, intersect_box, intersect_triangle, safe_inverse};

@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use glam::{Mat4, Vec2, Vec3};
 use penumbra::scene::{Instance, LoadWarnings, Material, Scene, SceneTriangle};
 
+pub mod bvh;
 pub mod gpu;
 
 /// PCG32 (O'Neill): small, deterministic, good enough for test inputs.

@@ -1,0 +1,39 @@
+// G-buffer from a host's world-position and normal textures (no unprojection, so no depth-buffer rounding).
+// Recorded by ShadowPass::record (src/gpu/embed.rs) before the shadow pass; CPU twin: src/reference/surface.rs.
+
+#import shared/frame
+#import shared/surface
+
+@group(0) @binding(0) var<uniform> params: SurfaceParams;
+// xyz: world-space position; w: 0 where the pixel sees no geometry, anything else where it does.
+@group(0) @binding(1) var position_texture: texture_2d<f32>;
+// xyz: world-space shading normal (any length; flipped to the camera's side here).
+@group(0) @binding(2) var normal_texture: texture_2d<f32>;
+// xyz: world-space geometric normal, or the shading normal again when has_geo_normal == 0.
+@group(0) @binding(3) var geo_normal_texture: texture_2d<f32>;
+@group(0) @binding(4) var<storage, read_write> gbuffer: array<GBufferTexel>;
+// For the filter: eye distance (0 = no geometry) and unit shading normal per pixel.
+@group(0) @binding(5) var<storage, read_write> depth: array<f32>;
+@group(0) @binding(6) var<storage, read_write> normal: array<vec4<f32>>;
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= params.width || gid.y >= params.height {
+        return;
+    }
+    let pixel = vec2<i32>(gid.xy);
+    let position = textureLoad(position_texture, pixel, 0);
+    var texel = background_texel();
+    if position.w != 0.0 {
+        let shading = textureLoad(normal_texture, pixel, 0).xyz;
+        var geometric = shading;
+        if params.has_geo_normal != 0u {
+            geometric = textureLoad(geo_normal_texture, pixel, 0).xyz;
+        }
+        texel = surface_texel(params, position.xyz, shading, geometric);
+    }
+    let p = gid.y * params.width + gid.x;
+    gbuffer[p] = texel;
+    depth[p] = texel.depth;
+    normal[p] = vec4<f32>(texel.normal, 0.0);
+}

@@ -1,0 +1,24 @@
+// Visibility per pixel from the shadow masks, as the filter's input: (0, 0, 0, unblocked rays / 16); 1 where no geometry.
+// Recorded by ShadowPass::record (src/gpu/embed.rs) after the shadow pass; CPU twin: reference::shadow::visibility.
+
+#import shared/surface
+
+const MASK_SKY: u32 = 0x10000u;
+
+@group(0) @binding(0) var<uniform> size: ImageSize;
+@group(0) @binding(1) var<storage, read> masks: array<u32>;
+@group(0) @binding(2) var<storage, read_write> values: array<vec4<f32>>;
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= size.width || gid.y >= size.height {
+        return;
+    }
+    let p = gid.y * size.width + gid.x;
+    let mask = masks[p];
+    var visibility = 1.0;
+    if (mask & MASK_SKY) == 0u {
+        visibility = f32(16u - countOneBits(mask & 0xffffu)) / 16.0;
+    }
+    values[p] = vec4<f32>(0.0, 0.0, 0.0, visibility);
+}

@@ -1,0 +1,136 @@
+//! What the embedded shadow pass writes, sized for one image: the visibility textures the
+//! host samples, and the pass's own per-pixel buffers.
+
+use super::super::{GpuContext, ShadowScratch, ShadowTracer, empty_storage_buffer, read_buffer};
+use crate::layout::GBufferTexel;
+use crate::{Error, Result};
+
+/// Format of both visibility textures: one 32-bit float per pixel.
+///
+/// Core WebGPU can write it from compute shaders. It is not filterable unless the device
+/// has [`wgpu::Features::FLOAT32_FILTERABLE`]: read it with `textureLoad`, or bind it as
+/// `texture_2d<f32>` with `sample_type: Float { filterable: false }` and a non-filtering
+/// sampler.
+pub const VISIBILITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+
+/// The visibility textures and scratch buffers of one `width`×`height` frame. Create one
+/// per image size (and per frame in flight); reuse it every frame.
+///
+/// Both textures are [`VISIBILITY_FORMAT`] with `TEXTURE_BINDING | STORAGE_BINDING |
+/// COPY_SRC` usage. A texel holds the fraction of the pixel's 16 shadow rays that reach
+/// the light, in `0..=1` (steps of 1/16 before the filter); 1 where the pixel sees no
+/// geometry, 0 where the surface is behind the light's plane.
+///
+/// Memory: about 120 bytes per pixel of buffers (the 64-byte G-buffer texel, the mask,
+/// depth, normal and two value vectors for the filter) plus 8 bytes of textures and 10 MiB
+/// of suspended-tile state at most.
+#[derive(Debug)]
+pub struct ShadowTargets {
+    width: u32,
+    height: u32,
+    /// Visibility before the 4×4 discontinuity filter.
+    pub unfiltered: wgpu::Texture,
+    /// Visibility after the filter (a copy of `unfiltered` when the filter is off).
+    pub filtered: wgpu::Texture,
+    pub(super) unfiltered_view: wgpu::TextureView,
+    pub(super) filtered_view: wgpu::TextureView,
+    /// `array<GBufferTexel>` made from the host's textures (`COPY_SRC`, for inspection).
+    pub gbuffer: wgpu::Buffer,
+    /// `array<u32>` shadow masks: bit j = ray j blocked, `1 << 16` = no geometry (`COPY_SRC`).
+    pub masks: wgpu::Buffer,
+    pub(super) depth: wgpu::Buffer,
+    pub(super) normal: wgpu::Buffer,
+    pub(super) values: wgpu::Buffer,
+    pub(super) filtered_values: wgpu::Buffer,
+    pub(super) scratch: ShadowScratch,
+}
+
+impl ShadowTargets {
+    /// Targets for `width`×`height` frames on `ctx`'s device.
+    ///
+    /// Errors: a zero or too large size ([`Error::InvalidInput`]), a buffer over the
+    /// device's storage-buffer limit ([`Error::BufferTooLarge`]).
+    pub fn new(ctx: &GpuContext, width: u32, height: u32) -> Result<ShadowTargets> {
+        let max = ctx.device.limits().max_texture_dimension_2d;
+        if width == 0 || height == 0 || width > max || height > max {
+            return Err(Error::invalid(
+                "ShadowTargets::new",
+                format!("size {width}x{height}: each side must be in 1..={max} on this device"),
+            ));
+        }
+        let pixels = u64::from(width) * u64::from(height);
+        let copy = wgpu::BufferUsages::COPY_SRC;
+        let none = wgpu::BufferUsages::empty();
+        let texture = |label: &str| {
+            ctx.capture_errors(label, || {
+                let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width,
+                        height,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: VISIBILITY_FORMAT,
+                    usage: wgpu::TextureUsages::TEXTURE_BINDING
+                        | wgpu::TextureUsages::STORAGE_BINDING
+                        | wgpu::TextureUsages::COPY_SRC,
+                    view_formats: &[],
+                });
+                let view = texture.create_view(&Default::default());
+                (texture, view)
+            })
+        };
+        let (unfiltered, unfiltered_view) = texture("unfiltered visibility")?;
+        let (filtered, filtered_view) = texture("filtered visibility")?;
+        Ok(ShadowTargets {
+            width,
+            height,
+            unfiltered,
+            filtered,
+            unfiltered_view,
+            filtered_view,
+            gbuffer: empty_storage_buffer(
+                ctx,
+                "embedded G-buffer",
+                pixels * size_of::<GBufferTexel>() as u64,
+                copy,
+            )?,
+            masks: empty_storage_buffer(ctx, "embedded shadow masks", pixels * 4, copy)?,
+            depth: empty_storage_buffer(ctx, "embedded depth", pixels * 4, none)?,
+            normal: empty_storage_buffer(ctx, "embedded normals", pixels * 16, none)?,
+            values: empty_storage_buffer(ctx, "embedded visibility", pixels * 16, none)?,
+            filtered_values: empty_storage_buffer(ctx, "embedded filtered visibility", pixels * 16, none)?,
+            scratch: ShadowScratch::new(&ctx.device, width, height),
+        })
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// `u32` per chunk of 128×128 tiles: tiles (4×4 pixels) whose rays were still being
+    /// traced when the pass's last resume round ended (`COPY_SRC`; see
+    /// [`super::ShadowSettings::resume_rounds`]). All zero means every mask is complete. A
+    /// host that must not stall copies it into its own mappable buffer and reads it a
+    /// frame later; [`ShadowTargets::unfinished_tiles`] does it the blocking way.
+    pub fn unfinished(&self) -> &wgpu::Buffer {
+        &self.scratch.unfinished
+    }
+
+    /// Tiles left unfinished by the last recorded pass, summed over chunks. Waits for the
+    /// GPU to finish all submitted work (for tests and diagnostics, not every frame).
+    pub fn unfinished_tiles(&self, ctx: &GpuContext) -> Result<u64> {
+        let chunks = ShadowTracer::chunks(self.width, self.height);
+        let counts: Vec<u32> = read_buffer(ctx, &self.scratch.unfinished, 0..chunks * 4)?;
+        Ok(counts.iter().map(|&c| u64::from(c)).sum())
+    }
+}
