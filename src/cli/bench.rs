@@ -6,6 +6,8 @@ use std::path::{Path, PathBuf};
 
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::frame::{RAY_OFFSET_FRACTION, camera_params};
+use penumbra::gpu::MotionSettings;
+use penumbra::gpu::animate::{AnimationReport, animate_instance, default_moving_instance};
 use penumbra::gpu::{
     FrameSettings, GpuContext, GpuOptions, GpuScene, GpuTimer, PrimaryPass, PrimaryTracer, Renderer,
     RendererOptions, Tracer, empty_storage_buffer,
@@ -93,6 +95,10 @@ pub struct BenchArgs {
     /// run with the counting kernels, so they never slow the timed runs).
     #[arg(long)]
     no_counters: bool,
+    /// Frames of the moving-object case per scene (the largest object that is not the
+    /// whole scene circles and spins; refit/rebuild and upload ms per frame); 0: skip it.
+    #[arg(long, default_value_t = 30)]
+    animate_frames: u32,
     /// How the 16-wide vector is built.
     #[arg(long, value_enum, default_value_t = VectorArg::Auto)]
     vector: VectorArg,
@@ -146,6 +152,55 @@ struct PrimaryResult {
     counters: Option<Counters>,
 }
 
+/// The moving-object case: CPU milliseconds per frame.
+#[derive(Debug, Serialize)]
+struct AnimationResult {
+    instance: u32,
+    instance_triangles: usize,
+    frames: usize,
+    refit_frames: usize,
+    refit_ms_mean: f64,
+    rebuild_frames: usize,
+    rebuild_ms_mean: f64,
+    upload_ms_mean: f64,
+    bytes_per_frame_mean: f64,
+}
+
+impl AnimationResult {
+    fn of(r: &AnimationReport) -> AnimationResult {
+        let mean = |v: Vec<f64>| {
+            if v.is_empty() {
+                0.0
+            } else {
+                v.iter().sum::<f64>() / v.len() as f64
+            }
+        };
+        let refits: Vec<f64> = r
+            .frames
+            .iter()
+            .filter(|f| !f.update.rebuilt)
+            .map(|f| f.update.bvh_ms)
+            .collect();
+        let rebuilds: Vec<f64> = r
+            .frames
+            .iter()
+            .filter(|f| f.update.rebuilt)
+            .map(|f| f.update.bvh_ms)
+            .collect();
+        AnimationResult {
+            instance: r.instance,
+            instance_triangles: r.instance_triangles,
+            frames: r.frames.len(),
+            refit_frames: refits.len(),
+            refit_ms_mean: mean(refits),
+            rebuild_frames: rebuilds.len(),
+            rebuild_ms_mean: mean(rebuilds),
+            upload_ms_mean: mean(r.frames.iter().map(|f| f.update.upload_ms).collect()),
+            bytes_per_frame_mean: mean(r.frames.iter().map(|f| f.update.bytes_uploaded as f64).collect()),
+        }
+    }
+}
+
 /// One case's figures.
 #[derive(Debug, Serialize)]
 struct CaseResult {
@@ -160,6 +215,8 @@ struct CaseResult {
     primary_ms_median: f64,
     primary: Vec<PrimaryResult>,
     tracers: Vec<TracerResult>,
+    /// The moving-object case, when the scene has an object to move.
+    animation: Option<AnimationResult>,
     /// Counter reductions of MFT against the packet tracer (packet / MFT).
     reductions_vs_packet: Option<Reductions>,
 }
@@ -416,6 +473,26 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 _ => None,
             };
             let primary_results = bench_primary(&ctx, args, &gpu_scene, &case.view, &case.scene)?;
+            let moving = default_moving_instance(&case.scene).filter(|_| args.animate_frames > 0);
+            let animation = match moving {
+                Some(instance) => {
+                    eprint!(
+                        "\ranimating instance {instance} for {} frames…   ",
+                        args.animate_frames
+                    );
+                    let report = animate_instance(
+                        &ctx,
+                        &case.scene,
+                        &bvh,
+                        instance,
+                        args.animate_frames,
+                        MotionSettings::default(),
+                    )?;
+                    eprint!("\r{:60}\r", "");
+                    Some(AnimationResult::of(&report))
+                }
+                None => None,
+            };
             let result = CaseResult {
                 scene: case.name.clone(),
                 view: case.view_name.clone(),
@@ -428,6 +505,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 primary_ms_median: median(&primary),
                 primary: primary_results,
                 tracers: tracer_results,
+                animation,
                 reductions_vs_packet,
             };
             print_case(&result);
@@ -573,6 +651,21 @@ fn print_case(r: &CaseResult) {
         );
     }
     println!("  (per-ray primary counts shown /16, as 16-wide equivalents)");
+    if let Some(a) = &r.animation {
+        println!(
+            "  moving instance {} ({} tris), {} frames: refit {} x {:.3} ms, rebuild {} x {:.2} ms, \
+             upload {:.3} ms and {:.0} KB per frame (CPU)",
+            a.instance,
+            a.instance_triangles,
+            a.frames,
+            a.refit_frames,
+            a.refit_ms_mean,
+            a.rebuild_frames,
+            a.rebuild_ms_mean,
+            a.upload_ms_mean,
+            a.bytes_per_frame_mean / 1e3
+        );
+    }
     if let Some(red) = &r.reductions_vs_packet {
         println!(
             "  packet/MFT: tris {:.2}x, +culling {:.2}x, AABB tests {:.2}x, triangle tests {:.2}x",
