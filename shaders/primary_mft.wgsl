@@ -52,8 +52,8 @@ var<private> stack_depth: array<f32, 64>;
 
 // The direction through the pixel-edge point (ex, ey) of the image.
 fn edge_dir(ex: u32, ey: u32) -> vec3<f32> {
-    let sx = 2.0 * f32(ex) / f32(camera.width) - 1.0;
-    let sy = 1.0 - 2.0 * f32(ey) / f32(camera.height);
+    let sx = 2.0 * f32(ex + camera.origin_x) / f32(camera.image_width) - 1.0;
+    let sy = 1.0 - 2.0 * f32(ey + camera.origin_y) / f32(camera.image_height);
     return camera.forward + sx * camera.right + sy * camera.up;
 }
 

@@ -30,14 +30,30 @@ pub fn camera_params(camera: &Camera, width: u32, height: u32, ray_offset: f32) 
         ray_offset,
         up: up * tan,
         pad: 0,
+        image_width: width,
+        image_height: height,
+        origin_x: 0,
+        origin_y: 0,
+    }
+}
+
+/// The camera of the `width`×`height` tile whose top-left pixel is `(x0, y0)` of the
+/// image `whole` projects: the same rays, written to a tile-sized G-buffer.
+pub fn tile_camera(whole: &CameraParams, x0: u32, y0: u32, width: u32, height: u32) -> CameraParams {
+    CameraParams {
+        width,
+        height,
+        origin_x: whole.origin_x + x0,
+        origin_y: whole.origin_y + y0,
+        ..*whole
     }
 }
 
 /// The unnormalised direction of the camera ray through pixel `(x, y)`; the
 /// WGSL primary kernel computes the same expression.
 pub fn camera_ray(cam: &CameraParams, x: u32, y: u32) -> Vec3 {
-    let sx = 2.0 * (x as f32 + 0.5) / cam.width as f32 - 1.0;
-    let sy = 1.0 - 2.0 * (y as f32 + 0.5) / cam.height as f32;
+    let sx = 2.0 * ((x + cam.origin_x) as f32 + 0.5) / cam.image_width as f32 - 1.0;
+    let sy = 1.0 - 2.0 * ((y + cam.origin_y) as f32 + 0.5) / cam.image_height as f32;
     cam.forward + sx * cam.right + sy * cam.up
 }
 

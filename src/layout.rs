@@ -164,7 +164,7 @@ pub struct GpuTexture {
     pub pad: u32,
 }
 
-/// The pinhole camera as the primary pass reads it, 64 bytes (WGSL `CameraParams`).
+/// The pinhole camera as the primary pass reads it, 80 bytes (WGSL `CameraParams`).
 ///
 /// The ray through pixel `(x, y)` (centre `(x+½, y+½)`, row 0 at the top) is
 /// `eye + t·(forward + sx·right + sy·up)` with `sx = 2(x+½)/width − 1` and
@@ -188,6 +188,15 @@ pub struct CameraParams {
     pub up: Vec3,
     /// Unused (bytes 60..64).
     pub pad: u32,
+    /// Width of the whole image the projection is for (bytes 64..68); `width` and
+    /// `height` are those of the tile this dispatch writes.
+    pub image_width: u32,
+    /// Height of the whole image (bytes 68..72).
+    pub image_height: u32,
+    /// Column of the tile's left edge in the whole image (bytes 72..76).
+    pub origin_x: u32,
+    /// Row of the tile's top edge in the whole image (bytes 76..80).
+    pub origin_y: u32,
 }
 
 /// The light as the shade pass sees it, 48 bytes (WGSL `ShadeParams`).
@@ -252,7 +261,7 @@ const _: () = assert!(size_of::<ShadeParams>() == 48);
 const _: () = assert!(size_of::<ShadingTriangle>() == 80);
 const _: () = assert!(size_of::<GpuTexture>() == 16);
 const _: () = assert!(size_of::<GpuMaterial>() == 16);
-const _: () = assert!(size_of::<CameraParams>() == 64);
+const _: () = assert!(size_of::<CameraParams>() == 80);
 const _: () = assert!(size_of::<BvhNode>() == 32);
 const _: () = assert!(size_of::<BvhTriangle>() == 48);
 const _: () = assert!(size_of::<GBufferTexel>() == 64);
@@ -447,7 +456,11 @@ mod tests {
                 right,
                 ray_offset,
                 up,
-                pad
+                pad,
+                image_width,
+                image_height,
+                origin_x,
+                origin_y
             }),
         );
     }

@@ -66,6 +66,12 @@ struct CameraParams {
     ray_offset: f32,     // bytes 44..48: shadow-ray origin offset from the surface
     up: vec3<f32>,       // bytes 48..60: scaled by tan(fov/2)
     pad: u32,            // bytes 60..64
+    // The whole image the projection is for; width and height above are the
+    // tile's, whose top-left pixel is (origin_x, origin_y) of the image.
+    image_width: u32,    // bytes 64..68
+    image_height: u32,   // bytes 68..72
+    origin_x: u32,       // bytes 72..76
+    origin_y: u32,       // bytes 76..80
 }
 
 // The light as the shade pass sees it, 48 bytes.

@@ -19,8 +19,8 @@ override ITERATION_BUDGET: u32 = 60000u;
 
 // The camera ray direction through the centre of pixel (x, y); twin of frame::camera_ray.
 fn pixel_dir(x: u32, y: u32) -> vec3<f32> {
-    let sx = 2.0 * (f32(x) + 0.5) / f32(camera.width) - 1.0;
-    let sy = 1.0 - 2.0 * (f32(y) + 0.5) / f32(camera.height);
+    let sx = 2.0 * (f32(x + camera.origin_x) + 0.5) / f32(camera.image_width) - 1.0;
+    let sy = 1.0 - 2.0 * (f32(y + camera.origin_y) + 0.5) / f32(camera.image_height);
     return camera.forward + sx * camera.right + sy * camera.up;
 }
 

@@ -8,8 +8,8 @@ use super::primary_pass::{PrimaryPass, PrimaryTracer};
 use super::shadow_tracer::{LeafMode, ShadowStats, ShadowTracer, Tracer, TracerOptions, VectorVariant};
 use super::{GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer, storage_buffer};
 use crate::filter::FilterParams;
-use crate::frame::{RAY_OFFSET_FRACTION, camera_params};
-use crate::layout::GBufferTexel;
+use crate::frame::{RAY_OFFSET_FRACTION, camera_params, tile_camera};
+use crate::layout::{CameraParams, GBufferTexel};
 use crate::reference::shade::shade_params;
 use crate::reference::shadow::shadow_params;
 use crate::sampling;
@@ -30,6 +30,9 @@ pub struct FrameSettings {
     pub filter: Option<(f32, f32)>,
     /// Read the G-buffer back too (tests compare it with the CPU twin).
     pub keep_gbuffer: bool,
+    /// Largest tile side (a multiple of 4) to render the image in, or `None` for the
+    /// largest whose buffers fit the adapter's storage-buffer limit (tests force tiling).
+    pub max_tile: Option<u32>,
 }
 
 impl FrameSettings {
@@ -43,6 +46,7 @@ impl FrameSettings {
                 FilterParams::DEFAULT_NORMAL_TOLERANCE,
             )),
             keep_gbuffer: false,
+            max_tile: None,
         }
     }
 }
@@ -216,6 +220,11 @@ impl Renderer {
     }
 
     /// [`Renderer::render`], calling `progress(tiles done, tiles)` as the shadow pass advances.
+    ///
+    /// An image whose per-pixel buffers would not fit one storage-buffer binding is
+    /// rendered in square tiles (sides a multiple of 4, so every pixel keeps its sample
+    /// set) with a 4-pixel margin for the filter, and stitched: the same pixels as one
+    /// big frame, bit for bit. Sides up to the device's 2D texture limit are accepted.
     pub fn render_with_progress(
         &self,
         ctx: &GpuContext,
@@ -230,6 +239,54 @@ impl Renderer {
                 "image size {w}x{h}: both sides must be at least 1"
             )));
         }
+        let limit = ctx.device.limits().max_texture_dimension_2d;
+        if w > limit || h > limit {
+            return Err(Error::Gpu(format!(
+                "image size {w}x{h}: this adapter's largest image side (max_texture_dimension_2d) \
+                 is {limit} pixels"
+            )));
+        }
+        let whole = camera_params(&view.camera, w, h, scene.diagonal * RAY_OFFSET_FRACTION);
+        let side = settings
+            .max_tile
+            .unwrap_or_else(|| tile_side(ctx.info.max_storage_buffer_binding_size));
+        if w <= side && h <= side {
+            return self.render_tile(ctx, scene, view, settings, &whole, progress);
+        }
+        let regions = tile_regions(w, h, side);
+        let unit = self.shadow.tracer.unit();
+        let units = |r: &TileRegion| u64::from(r.w.div_ceil(unit)) * u64::from(r.h.div_ceil(unit));
+        let total: u64 = regions.iter().map(units).sum();
+        let mut done = 0u64;
+        let mut out: Option<Frame> = None;
+        for r in &regions {
+            let tile_settings = FrameSettings {
+                width: r.w,
+                height: r.h,
+                ..*settings
+            };
+            let camera = tile_camera(&whole, r.x, r.y, r.w, r.h);
+            let tile = self.render_tile(ctx, scene, view, &tile_settings, &camera, &mut |d, _| {
+                progress(done + d, total)
+            })?;
+            done += units(r);
+            let frame = out.get_or_insert_with(|| Frame::empty(w, h, settings.keep_gbuffer));
+            frame.paste(&tile, r);
+        }
+        Ok(out.expect("an image has at least one tile"))
+    }
+
+    /// One frame (or tile) of the image `camera` projects, `settings`-sized.
+    fn render_tile(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        view: &View,
+        settings: &FrameSettings,
+        camera: &CameraParams,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<Frame> {
+        let (w, h) = (settings.width, settings.height);
         let pixels = u64::from(w) * u64::from(h);
         let rw = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
         let gbuffer = empty_storage_buffer(ctx, "G-buffer", pixels * size_of::<GBufferTexel>() as u64, rw)?;
@@ -247,8 +304,7 @@ impl Renderer {
         let points: Vec<[f32; 4]> = points.iter().map(|p: &Vec3| p.extend(0.0).to_array()).collect();
         let light_points = storage_buffer(ctx, "light points", &points, wgpu::BufferUsages::empty())?;
 
-        let camera = camera_params(&view.camera, w, h, scene.diagonal * RAY_OFFSET_FRACTION);
-        let camera_buf = uniform_buffer(ctx, "camera", &camera);
+        let camera_buf = uniform_buffer(ctx, "camera", camera);
         let shade_buf = uniform_buffer(ctx, "shade params", &shade_params(&view.light, w, h));
         let mut timer = GpuTimer::new(ctx, TIMER_CAPACITY);
         let groups = (w.div_ceil(8), h.div_ceil(8));
@@ -338,6 +394,96 @@ impl Renderer {
             shadow_stats,
             primary_counters,
         })
+    }
+}
+
+/// Bytes of the largest per-pixel buffer (the G-buffer).
+const LARGEST_PIXEL_BYTES: u64 = size_of::<GBufferTexel>() as u64;
+/// Margin around a tile, for the filter's 4×4 window (a multiple of 4: sample sets).
+const TILE_MARGIN: u32 = 4;
+
+/// The largest tile side (a multiple of 4) whose margined G-buffer fits `limit` bytes.
+fn tile_side(limit: u64) -> u32 {
+    let side = ((limit / LARGEST_PIXEL_BYTES) as f64).sqrt() as u32;
+    (side.saturating_sub(2 * TILE_MARGIN) / 4 * 4).max(4)
+}
+
+/// A tile: the pixels `[x, x + w) × [y, y + h)` rendered (margin included), of which
+/// `[keep_x0, keep_x1) × [keep_y0, keep_y1)` (image coordinates) go into the image.
+#[derive(Clone, Copy, Debug)]
+struct TileRegion {
+    x: u32,
+    y: u32,
+    w: u32,
+    h: u32,
+    keep_x0: u32,
+    keep_x1: u32,
+    keep_y0: u32,
+    keep_y1: u32,
+}
+
+/// Tiles of side `side` covering a `width`×`height` image, each with its margin.
+fn tile_regions(width: u32, height: u32, side: u32) -> Vec<TileRegion> {
+    let mut out = Vec::new();
+    for y0 in (0..height).step_by(side as usize) {
+        for x0 in (0..width).step_by(side as usize) {
+            let (x1, y1) = ((x0 + side).min(width), (y0 + side).min(height));
+            let (rx, ry) = (x0.saturating_sub(TILE_MARGIN), y0.saturating_sub(TILE_MARGIN));
+            let (rx1, ry1) = ((x1 + TILE_MARGIN).min(width), (y1 + TILE_MARGIN).min(height));
+            out.push(TileRegion {
+                x: rx,
+                y: ry,
+                w: rx1 - rx,
+                h: ry1 - ry,
+                keep_x0: x0,
+                keep_x1: x1,
+                keep_y0: y0,
+                keep_y1: y1,
+            });
+        }
+    }
+    out
+}
+
+impl Frame {
+    /// A `width`×`height` frame with nothing in it yet, to paste tiles into.
+    fn empty(width: u32, height: u32, keep_gbuffer: bool) -> Frame {
+        let n = width as usize * height as usize;
+        Frame {
+            width,
+            height,
+            masks: vec![0; n],
+            unfiltered: vec![[0.0; 4]; n],
+            filtered: vec![[0.0; 4]; n],
+            brdf: vec![[0.0; 4]; n],
+            gbuffer: keep_gbuffer.then(|| vec![GBufferTexel::default(); n]),
+            timings: Vec::new(),
+            shadow_stats: ShadowStats::default(),
+            primary_counters: crate::counters::Counters::default(),
+        }
+    }
+
+    /// Copies the kept part of `tile` (rendered over `r`) into this frame, and adds
+    /// its timings and statistics.
+    fn paste(&mut self, tile: &Frame, r: &TileRegion) {
+        let (w, tw) = (self.width as usize, r.w as usize);
+        for y in r.keep_y0..r.keep_y1 {
+            let src = (y - r.y) as usize * tw + (r.keep_x0 - r.x) as usize;
+            let dst = y as usize * w + r.keep_x0 as usize;
+            let n = (r.keep_x1 - r.keep_x0) as usize;
+            self.masks[dst..dst + n].copy_from_slice(&tile.masks[src..src + n]);
+            self.unfiltered[dst..dst + n].copy_from_slice(&tile.unfiltered[src..src + n]);
+            self.filtered[dst..dst + n].copy_from_slice(&tile.filtered[src..src + n]);
+            self.brdf[dst..dst + n].copy_from_slice(&tile.brdf[src..src + n]);
+            if let (Some(g), Some(t)) = (self.gbuffer.as_mut(), tile.gbuffer.as_ref()) {
+                g[dst..dst + n].copy_from_slice(&t[src..src + n]);
+            }
+        }
+        self.timings.extend(tile.timings.iter().cloned());
+        self.shadow_stats.dispatches += tile.shadow_stats.dispatches;
+        self.shadow_stats.suspensions += tile.shadow_stats.suspensions;
+        self.shadow_stats.counters += tile.shadow_stats.counters;
+        self.primary_counters += tile.primary_counters;
     }
 }
 

@@ -56,8 +56,8 @@ pub struct PixelFrustum {
 
 /// The direction through the pixel-edge point `(ex, ey)`; twin of WGSL `edge_dir`.
 fn edge_dir(cam: &CameraParams, ex: u32, ey: u32) -> Vec3 {
-    let sx = 2.0 * ex as f32 / cam.width as f32 - 1.0;
-    let sy = 1.0 - 2.0 * ey as f32 / cam.height as f32;
+    let sx = 2.0 * (ex + cam.origin_x) as f32 / cam.image_width as f32 - 1.0;
+    let sy = 1.0 - 2.0 * (ey + cam.origin_y) as f32 / cam.image_height as f32;
     cam.forward + sx * cam.right + sy * cam.up
 }
 
