@@ -85,7 +85,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
     runs: u32,
     /// BVH leaf sizes to bench, comma-separated.
-    #[arg(long, value_delimiter = ',', default_value = "4")]
+    #[arg(long, value_delimiter = ',', default_value = "8")]
     leaf_sizes: Vec<u32>,
     /// Also time MFT without frustum shrinking (the paper's "CR", on by default), as the
     /// row `mft-no-cr`.
