@@ -520,11 +520,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         cases: results,
     };
     if let Some(path) = &args.json {
-        let json = serde_json::to_vec_pretty(&report).map_err(|e| Error::Output {
-            path: path.clone(),
-            message: format!("could not encode the report: {e}"),
-        })?;
-        penumbra::output::write_bytes_atomically(path, &json)?;
+        super::write_json(path, &report)?;
         println!("wrote     {}", path.display());
     }
     Ok(())

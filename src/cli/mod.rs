@@ -81,3 +81,12 @@ pub fn run(cli: Cli) -> penumbra::Result<()> {
         Command::Compare(args) => compare::run(&args),
     }
 }
+
+/// Writes `report` as pretty JSON to `path`, whole or not at all.
+pub fn write_json(path: &std::path::Path, report: &impl serde::Serialize) -> penumbra::Result<()> {
+    let json = serde_json::to_vec_pretty(report).map_err(|e| penumbra::Error::Output {
+        path: path.to_owned(),
+        message: format!("could not encode the report: {e}"),
+    })?;
+    penumbra::output::write_bytes_atomically(path, &json)
+}

@@ -208,11 +208,7 @@ pub fn run(args: &QualityArgs) -> Result<()> {
             exact_cpu_seconds: exact_seconds,
             methods: results,
         };
-        let json = serde_json::to_vec_pretty(&report).map_err(|e| Error::Output {
-            path: path.clone(),
-            message: format!("could not encode the report: {e}"),
-        })?;
-        penumbra::output::write_bytes_atomically(path, &json)?;
+        super::write_json(path, &report)?;
         println!("wrote     {}", path.display());
     }
     Ok(())

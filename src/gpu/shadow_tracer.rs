@@ -265,6 +265,26 @@ impl ShadowTracer {
         }
     }
 
+    /// The parameters of each dispatch chunk of the image `params` describes: its first
+    /// unit (tile or pixel) and its size in units, at most `CHUNK_TILES` a side.
+    fn chunk_params(&self, params: &ShadowParams) -> Vec<ShadowParams> {
+        let unit = self.tracer.unit();
+        let (units_x, units_y) = (params.width.div_ceil(unit), params.height.div_ceil(unit));
+        let mut out = Vec::new();
+        for ty0 in (0..units_y).step_by(CHUNK_TILES as usize) {
+            for tx0 in (0..units_x).step_by(CHUNK_TILES as usize) {
+                out.push(ShadowParams {
+                    tile_origin_x: tx0,
+                    tile_origin_y: ty0,
+                    tiles_x: CHUNK_TILES.min(units_x - tx0),
+                    tiles_y: CHUNK_TILES.min(units_y - ty0),
+                    ..*params
+                });
+            }
+        }
+        out
+    }
+
     /// Workgroups of a dispatch over `units` units (tiles or pixels).
     fn groups(&self, units: u32) -> (u32, u32) {
         if self.tracer.uses_vector() {
@@ -334,47 +354,40 @@ impl ShadowTracer {
         let mut stats = ShadowStats::default();
         let total_units = u64::from(units_x) * u64::from(units_y);
         let mut units_done = 0u64;
-        for ty0 in (0..units_y).step_by(CHUNK_TILES as usize) {
-            for tx0 in (0..units_x).step_by(CHUNK_TILES as usize) {
-                let mut p = *params;
-                p.tile_origin_x = tx0;
-                p.tile_origin_y = ty0;
-                p.tiles_x = CHUNK_TILES.min(units_x - tx0);
-                p.tiles_y = CHUNK_TILES.min(units_y - ty0);
-                let units = p.tiles_x * p.tiles_y;
-                let groups = self.groups(units);
-                for round in 0.. {
-                    if round == MAX_ROUNDS {
-                        return Err(Error::Gpu(format!(
-                            "shadow pass: tiles still suspended after {MAX_ROUNDS} rounds"
-                        )));
-                    }
-                    p.resume = u32::from(round > 0);
-                    ctx.queue.write_buffer(&params_buf, 0, bytemuck::bytes_of(&p));
-                    let mut encoder = ctx.device.create_command_encoder(&Default::default());
-                    encoder.clear_buffer(&status, 0, None);
-                    let writes = timer.as_deref_mut().and_then(|t| t.pass_writes("shadow"));
-                    self.kernel
-                        .record(&mut encoder, "shadow/trace", &bind, writes, groups);
-                    ctx.queue.submit([encoder.finish()]);
-                    stats.dispatches += 1;
-                    let words = read_buffer::<u32>(ctx, &status, 0..(STATUS_WORDS * 4) as u64)?;
-                    stats.counters += Counters::from_status_words(&words);
-                    if words[0] == 0 {
-                        break;
-                    }
-                    if !self.tracer.uses_vector() {
-                        return Err(Error::Gpu(format!(
-                            "shadow pass ({}): {} rays ran out of their {} loop iterations \
-                             (BVH too deep or degenerate)",
-                            self.tracer, words[0], params.iteration_budget
-                        )));
-                    }
-                    stats.suspensions += u64::from(words[0]);
+        for mut p in self.chunk_params(params) {
+            let units = p.tiles_x * p.tiles_y;
+            let groups = self.groups(units);
+            for round in 0.. {
+                if round == MAX_ROUNDS {
+                    return Err(Error::Gpu(format!(
+                        "shadow pass: tiles still suspended after {MAX_ROUNDS} rounds"
+                    )));
                 }
-                units_done += u64::from(units);
-                progress(units_done, total_units);
+                p.resume = u32::from(round > 0);
+                ctx.queue.write_buffer(&params_buf, 0, bytemuck::bytes_of(&p));
+                let mut encoder = ctx.device.create_command_encoder(&Default::default());
+                encoder.clear_buffer(&status, 0, None);
+                let writes = timer.as_deref_mut().and_then(|t| t.pass_writes("shadow"));
+                self.kernel
+                    .record(&mut encoder, "shadow/trace", &bind, writes, groups);
+                ctx.queue.submit([encoder.finish()]);
+                stats.dispatches += 1;
+                let words = read_buffer::<u32>(ctx, &status, 0..(STATUS_WORDS * 4) as u64)?;
+                stats.counters += Counters::from_status_words(&words);
+                if words[0] == 0 {
+                    break;
+                }
+                if !self.tracer.uses_vector() {
+                    return Err(Error::Gpu(format!(
+                        "shadow pass ({}): {} rays ran out of their {} loop iterations \
+                             (BVH too deep or degenerate)",
+                        self.tracer, words[0], params.iteration_budget
+                    )));
+                }
+                stats.suspensions += u64::from(words[0]);
             }
+            units_done += u64::from(units);
+            progress(units_done, total_units);
         }
         stats.counters.suspensions = stats.suspensions;
         Ok(stats)
@@ -400,8 +413,6 @@ impl ShadowTracer {
         params: &ShadowParams,
         resume_rounds: u32,
     ) {
-        let unit = self.tracer.unit();
-        let (tiles_x, tiles_y) = (params.width.div_ceil(unit), params.height.div_ceil(unit));
         let resume_rounds = if self.tracer.uses_vector() {
             resume_rounds
         } else {
@@ -409,38 +420,31 @@ impl ShadowTracer {
             0
         };
         let mut chunk_index = 0u64;
-        for ty0 in (0..tiles_y).step_by(CHUNK_TILES as usize) {
-            for tx0 in (0..tiles_x).step_by(CHUNK_TILES as usize) {
-                let mut p = *params;
-                p.tile_origin_x = tx0;
-                p.tile_origin_y = ty0;
-                p.tiles_x = CHUNK_TILES.min(tiles_x - tx0);
-                p.tiles_y = CHUNK_TILES.min(tiles_y - ty0);
-                let groups = self.groups(p.tiles_x * p.tiles_y);
-                for round in 0..=resume_rounds {
-                    p.resume = u32::from(round > 0);
-                    if round == resume_rounds {
-                        encoder.clear_buffer(&scratch.status, 0, None);
-                    }
-                    let params_buf = uniform_buffer_on(device, "shadow params", &p);
-                    let bind = self.kernel.bind_on(
-                        device,
-                        &[
-                            &params_buf,
-                            &scene.nodes,
-                            &scene.triangles,
-                            gbuffer,
-                            light_points,
-                            masks,
-                            &scratch.state,
-                            &scratch.status,
-                        ],
-                    );
-                    self.kernel.record(encoder, "shadow/trace", &bind, None, groups);
+        for mut p in self.chunk_params(params) {
+            let groups = self.groups(p.tiles_x * p.tiles_y);
+            for round in 0..=resume_rounds {
+                p.resume = u32::from(round > 0);
+                if round == resume_rounds {
+                    encoder.clear_buffer(&scratch.status, 0, None);
                 }
-                encoder.copy_buffer_to_buffer(&scratch.status, 0, &scratch.unfinished, chunk_index * 4, 4);
-                chunk_index += 1;
+                let params_buf = uniform_buffer_on(device, "shadow params", &p);
+                let bind = self.kernel.bind_on(
+                    device,
+                    &[
+                        &params_buf,
+                        &scene.nodes,
+                        &scene.triangles,
+                        gbuffer,
+                        light_points,
+                        masks,
+                        &scratch.state,
+                        &scratch.status,
+                    ],
+                );
+                self.kernel.record(encoder, "shadow/trace", &bind, None, groups);
             }
+            encoder.copy_buffer_to_buffer(&scratch.status, 0, &scratch.unfinished, chunk_index * 4, 4);
+            chunk_index += 1;
         }
     }
 
