@@ -436,14 +436,14 @@ fn unfinished_tiles_are_reported_and_resume_rounds_finish_them() {
         full.unfinished, 0,
         "the default budget finishes this frame in one round"
     );
-    let cut = run(500, 0);
+    let cut = run(100, 0);
     eprintln!(
-        "budget 500, no resume rounds: {} tiles unfinished",
+        "budget 100, no resume rounds: {} tiles unfinished",
         cut.unfinished
     );
-    assert!(cut.unfinished > 0, "a budget of 500 steps suspends some tile");
+    assert!(cut.unfinished > 0, "a budget of 100 steps suspends some tile");
     assert_ne!(cut.masks, full.masks, "unfinished tiles have incomplete masks");
-    let resumed = run(500, 200);
+    let resumed = run(100, 1000);
     assert_eq!(resumed.unfinished, 0);
     assert_eq!(
         resumed.masks, full.masks,

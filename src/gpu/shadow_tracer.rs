@@ -419,8 +419,7 @@ impl ShadowTracer {
             encoder.clear_buffer(masks, 0, None);
             0
         };
-        let mut chunk_index = 0u64;
-        for mut p in self.chunk_params(params) {
+        for (chunk_index, mut p) in (0u64..).zip(self.chunk_params(params)) {
             let groups = self.groups(p.tiles_x * p.tiles_y);
             for round in 0..=resume_rounds {
                 p.resume = u32::from(round > 0);
@@ -444,7 +443,6 @@ impl ShadowTracer {
                 self.kernel.record(encoder, "shadow/trace", &bind, None, groups);
             }
             encoder.copy_buffer_to_buffer(&scratch.status, 0, &scratch.unfinished, chunk_index * 4, 4);
-            chunk_index += 1;
         }
     }
 
