@@ -91,6 +91,8 @@ fn structure_check_can_fail() {
     let mut bvh = Bvh::build_from_corners(&corners, &BvhSettings::default()).unwrap();
     // Shrink a leaf's box: the containment check must notice.
     let leaf = bvh.nodes.iter().position(|n| n.is_leaf()).unwrap();
+    let max_leaf = BvhSettings::default().max_leaf_size;
+    assert!(check_structure(&corners, &bvh, max_leaf).is_ok(), "the built tree passes");
     bvh.nodes[leaf].bmax = bvh.nodes[leaf].bmin;
-    assert!(check_structure(&corners, &bvh, 4).is_err());
+    assert!(check_structure(&corners, &bvh, max_leaf).is_err());
 }

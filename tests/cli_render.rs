@@ -150,7 +150,7 @@ fn leaf_mode_is_selectable_and_reported() {
         );
         let vector = stdout
             .lines()
-            .find(|l| l.starts_with("vector"))
+            .find(|l| l.starts_with("tracer"))
             .unwrap_or_default();
         assert!(vector.contains(reported), "--leaf-mode {mode}:\n{stdout}");
     }

@@ -67,7 +67,8 @@ fn refitted_tree_is_tight_and_matches_brute_force() {
         let mut bvh = Bvh::build_from_corners(&corners, &BvhSettings::default()).unwrap();
         let now = moved(&corners, k, m);
         bvh.refit(&now, &slots_of_first(&bvh, k));
-        check_structure(&now, &bvh, 4).unwrap_or_else(|e| panic!("{label}: {e}"));
+        check_structure(&now, &bvh, BvhSettings::default().max_leaf_size)
+            .unwrap_or_else(|e| panic!("{label}: {e}"));
         assert_tight(&bvh, &now);
         let rays = random_rays(&now, 3000, 5);
         let hits = check_queries(&bvh, &rays).unwrap_or_else(|e| panic!("{label}: {e}"));
