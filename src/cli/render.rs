@@ -1,17 +1,20 @@
 //! `penumbra render`: a soft-shadowed image of a scene, PNG or EXR.
 
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use penumbra::Result;
 use penumbra::bvh::Bvh;
 use penumbra::filter::FilterParams;
+use penumbra::gpu::memory;
 use penumbra::gpu::{
     FrameSettings, GpuContext, GpuOptions, GpuScene, LeafMode, Renderer, RendererOptions, VectorVariant,
 };
 use penumbra::output::{FloatImage, HdrImage, ToneMap, write_float_image, write_image};
 use penumbra::reference::shadow::MASK_SKY;
 use penumbra::view::View;
+use penumbra::view_checks::view_warnings;
+use penumbra::{Error, Result};
 
 use super::BvhArgs;
 use super::scene_arg::{builtin_names, builtin_view, load_scene};
@@ -74,7 +77,7 @@ pub struct RenderArgs {
     #[arg(long)]
     view: Option<PathBuf>,
     /// Image size WIDTHxHEIGHT in pixels (any size; edge tiles are partial).
-    #[arg(long, default_value = "512x512", value_parser = parse_size)]
+    #[arg(long, default_value = "512x512", value_parser = super::parse_size)]
     size: (u32, u32),
     /// Shadow rays per pixel (multi-frusta tracing uses 16: one interleaved set per pixel).
     #[arg(long, default_value_t = 16)]
@@ -110,18 +113,6 @@ pub struct RenderArgs {
     bvh: BvhArgs,
 }
 
-fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or("expected WIDTHxHEIGHT, e.g. 512x512")?;
-    let parse = |v: &str| v.trim().parse::<u32>().map_err(|e| format!("'{v}': {e}"));
-    let (w, h) = (parse(w)?, parse(h)?);
-    if w == 0 || h == 0 {
-        return Err("width and height must be at least 1".into());
-    }
-    Ok((w, h))
-}
-
 /// `out.png` + `visibility` → `out.visibility.exr`.
 fn aov_path(output: &Path, name: &str) -> PathBuf {
     let stem = output
@@ -134,7 +125,7 @@ fn aov_path(output: &Path, name: &str) -> PathBuf {
 /// Renders and writes the image(s), printing what ran and how long it took.
 pub fn run(args: &RenderArgs) -> Result<()> {
     if args.spp != 16 {
-        return Err(penumbra::Error::Gpu(format!(
+        return Err(Error::Gpu(format!(
             "--spp {}: the multi-frusta tracer traces exactly 16 rays per pixel",
             args.spp
         )));
@@ -145,7 +136,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     if !matches!(ext.as_deref(), Some("png" | "exr")) {
-        return Err(penumbra::Error::Output {
+        return Err(Error::Output {
             path: args.output.clone(),
             message: "unsupported output format: use .png or .exr".into(),
         });
@@ -155,7 +146,17 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let view = match (&args.view, builtin_view(args.scene.as_deref())) {
         (Some(path), _) => View::load(path)?,
         (None, Some(view)) => view,
-        (None, None) => View::default_for(&scene.bounds(), scene.camera),
+        (None, None) => {
+            let view = View::default_for(&scene.bounds(), scene.camera);
+            // The scene's bounds can be too large for a light above them.
+            view.validate().map_err(|m| {
+                Error::scene(
+                    &scene.source,
+                    format!("the default view for this scene is unusable ({m}); give one with --view"),
+                )
+            })?;
+            view
+        }
     };
     if let Some(y) = view.ground_y {
         scene.add_ground_plane(y);
@@ -164,6 +165,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         eprintln!("warning: {}: {w}", scene.source.display());
     }
     let bvh = Bvh::build(&scene, &args.bvh.settings())?;
+    let view_name = args
+        .view
+        .as_ref()
+        .map_or_else(|| "view".to_owned(), |p| p.display().to_string());
+    for w in view_warnings(&view, &scene, &bvh) {
+        eprintln!("warning: {view_name}: {w}");
+    }
     println!(
         "scene     {} — {} triangles, BVH {} nodes in {:.1} ms",
         scene.source.display(),
@@ -176,6 +184,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         adapter: args.adapter.clone(),
     })?;
     println!("adapter   {}", ctx.info);
+    // Before compiling anything: an image too large for the device fails at once.
+    memory::check_frame_fits(memory::storage_limit(&ctx), width, height)?;
     let forced = match args.vector {
         VectorArg::Auto => None,
         VectorArg::Subgroup => Some(VectorVariant::Subgroup),
@@ -200,15 +210,25 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     } else {
         settings.filter = Some((args.depth_tolerance, args.normal_tolerance));
     }
+    // Progress lines rewrite themselves with \r: only for a person watching,
+    // not in logs or pipes, where stderr must hold only warnings and errors.
+    let progress = std::io::stderr().is_terminal();
     // Lavapipe compiles a pipeline at its first dispatch: a tiny frame first
     // keeps compilation out of the timings below.
-    eprint!("compiling kernels…\r");
+    if progress {
+        eprint!("compiling kernels…\r");
+    }
     renderer.render(&ctx, &gpu_scene, &view, &FrameSettings::new(8, 8))?;
     let start = Instant::now();
     let frame = renderer.render_with_progress(&ctx, &gpu_scene, &view, &settings, &mut |done, total| {
-        eprint!("\rshadow    {done}/{total} tiles of 4x4   ");
-    })?;
-    eprint!("\r{:60}\r", "");
+        if progress {
+            eprint!("\rshadow    {done}/{total} tiles of 4x4   ");
+        }
+    });
+    if progress {
+        eprint!("\r{:60}\r", "");
+    }
+    let frame = frame?;
     let wall = start.elapsed().as_secs_f64();
 
     let hits = frame.masks.iter().filter(|&&m| m & MASK_SKY == 0).count() as f64;

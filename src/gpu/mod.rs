@@ -9,6 +9,7 @@
 mod buffers;
 mod context;
 pub mod kernel;
+pub mod memory;
 pub mod render;
 mod scene_buffers;
 pub mod shadow_pass;

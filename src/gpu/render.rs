@@ -194,6 +194,7 @@ impl Renderer {
                 "image size {w}x{h}: both sides must be at least 1"
             )));
         }
+        super::memory::check_frame_fits(super::memory::storage_limit(ctx), w, h)?;
         let pixels = u64::from(w) * u64::from(h);
         let rw = wgpu::BufferUsages::COPY_SRC;
         let gbuffer = empty_storage_buffer(ctx, "G-buffer", pixels * size_of::<GBufferTexel>() as u64, rw)?;
