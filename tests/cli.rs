@@ -86,10 +86,7 @@ fn bad_flags_are_usage_errors() {
 fn verbose_adds_the_source_chain_and_detail() {
     let quiet = penumbra(&["info", "/no/such/scene.glb"]);
     let io = std::fs::read("/no/such/scene.glb").unwrap_err();
-    assert_eq!(
-        text(&quiet.stderr),
-        format!("error: /no/such/scene.glb: {io}\n")
-    );
+    assert_eq!(text(&quiet.stderr), format!("error: /no/such/scene.glb: {io}\n"));
     // A global flag: before or after the subcommand.
     for args in [
         ["info", "/no/such/scene.glb", "--verbose"],
@@ -164,9 +161,15 @@ fn info_reports_gpu_memory_for_a_size() {
     assert!(out.status.success());
     let stdout = text(&out.stdout);
     let frame = stdout.lines().find(|l| l.starts_with("  frame")).unwrap();
-    assert!(frame.contains("for 7x1 (G-buffer 448 B, shadow masks 28 B,"), "{frame}");
+    assert!(
+        frame.contains("for 7x1 (G-buffer 448 B, shadow masks 28 B,"),
+        "{frame}"
+    );
     let scene = stdout.lines().find(|l| l.starts_with("  scene")).unwrap();
-    assert!(scene.contains("BVH nodes") && scene.contains("texels 16 B"), "{scene}");
+    assert!(
+        scene.contains("BVH nodes") && scene.contains("texels 16 B"),
+        "{scene}"
+    );
     let out = penumbra(&["info", "--size", "0x5"]);
     assert_eq!(out.status.code(), Some(2), "a usage error");
 }

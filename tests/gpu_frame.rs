@@ -709,7 +709,7 @@ fn cli_free_sizes() {
     let points = sampling::light_points(&view.light);
     for variant in variants() {
         let renderer = Renderer::new(ctx(), Some(variant)).unwrap();
-        for (w, h) in [(1u32, 1u32), (5, 3), (17, 33)] {
+        for (w, h) in [(1u32, 1u32), (1, 7), (7, 1), (5, 3), (17, 33)] {
             let n = (w * h) as usize;
             let mut settings = FrameSettings::new(w, h);
             settings.keep_gbuffer = true;
@@ -767,6 +767,26 @@ fn cli_free_sizes() {
             .render(ctx(), &gpu_scene, &view, &FrameSettings::new(w, h))
             .expect_err("an empty image must be refused");
         eprintln!("{w}x{h}: {err}");
+    }
+    // Too large for one storage buffer: refused before anything is allocated,
+    // naming the limit and the largest image that fits.
+    let limit = penumbra::gpu::memory::storage_limit(ctx());
+    let err = renderer
+        .render(ctx(), &gpu_scene, &view, &FrameSettings::new(60_000, 50_000))
+        .expect_err("an image beyond the device's buffer limit must be refused");
+    eprintln!("60000x50000: {err}");
+    match err {
+        penumbra::Error::ImageTooLarge {
+            limit: l,
+            largest_width,
+            largest_height,
+            ..
+        } => {
+            assert_eq!(l, limit);
+            let fits = FrameSettings::new(largest_width, largest_height);
+            assert!(penumbra::gpu::memory::check_frame_fits(limit, fits.width, fits.height).is_ok());
+        }
+        other => panic!("expected ImageTooLarge, got {other:?}"),
     }
     eprintln!("cli_free_sizes: {:.1} s", start.elapsed().as_secs_f64());
 }
