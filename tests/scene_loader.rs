@@ -584,3 +584,53 @@ fn missing_or_unreadable_texture_is_an_error_naming_the_file() {
     let data = ShadingData::new(&scene, &bvh).unwrap();
     assert_eq!(data.texels.len(), 6);
 }
+
+#[test]
+fn what_the_gltf_crate_would_unwrap_is_an_error() {
+    // Found by fuzzing: the gltf crate unwraps these when the image is read.
+    let mut f = TestFile::quad();
+    f.json["images"] = json!([{"name": "nothing"}]);
+    assert_exact_error(
+        load_glb(&f.glb()),
+        "test.glb: image 0 has neither a uri nor a bufferView",
+    );
+    let mut f = TestFile::quad();
+    f.json["images"] = json!([{"bufferView": 0}]);
+    assert_exact_error(
+        load_glb(&f.glb()),
+        "test.glb: image 0 has a bufferView but no mimeType (glTF 2.0 requires one)",
+    );
+    // Found reading the gltf crate after that: the projection is unwrapped by type.
+    let mut f = TestFile::quad();
+    f.json["cameras"] = json!([{"type": "perspective", "orthographic":
+        {"xmag": 1.0, "ymag": 1.0, "zfar": 10.0, "znear": 0.1}}]);
+    f.json["nodes"] = json!([{"mesh": 0, "camera": 0}]);
+    assert_exact_error(
+        load_glb(&f.glb()),
+        "test.glb: camera 0: its type names a projection the camera does not define",
+    );
+}
+
+#[test]
+fn inputs_that_crashed_the_fuzzer_are_errors() {
+    // Each file under tests/fuzz_regressions/scene_loader/ once panicked the loader
+    // (see README, "Fuzzing"); loaded as the fuzz target loads it.
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions/scene_loader");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    assert!(!files.is_empty());
+    for file in files {
+        let bytes = std::fs::read(&file).unwrap();
+        for name in [
+            "/nonexistent-fuzz-dir/fuzz.glb",
+            "/nonexistent-fuzz-dir/fuzz.gltf",
+        ] {
+            let err = Scene::from_bytes(&bytes, Path::new(name))
+                .expect_err(&format!("{}: a malformed file", file.display()));
+            eprintln!("{}: {err}", file.display());
+        }
+    }
+}

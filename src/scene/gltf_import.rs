@@ -46,7 +46,7 @@ pub(super) fn import(bytes: &[u8], path: &Path) -> Result<Scene, String> {
             }
         ));
     }
-    check_attribute_indices(&root)?;
+    check_what_gltf_assumes(&root)?;
     // gltf-json's validator indexes arrays before checking some indices; a
     // panic there is a malformed file, so it becomes an error like the rest.
     let doc = std::panic::catch_unwind(|| gltf::Document::from_json(root))
@@ -146,8 +146,41 @@ pub(super) fn import(bytes: &[u8], path: &Path) -> Result<Scene, String> {
     })
 }
 
-/// Checks what gltf-json 1.4's validator would index unchecked: the accessors
-/// named by mesh primitive attributes.
+/// Checks what gltf 1.4 would index or unwrap unchecked: the accessors named
+/// by mesh primitive attributes (its validator indexes them), an image's
+/// `uri` or `bufferView` + `mimeType`, and a camera's projection of its
+/// `type` (both unwrapped when read; found by fuzzing).
+fn check_what_gltf_assumes(root: &gltf::json::Root) -> Result<(), String> {
+    for (i, image) in root.images.iter().enumerate() {
+        match (&image.buffer_view, &image.mime_type, &image.uri) {
+            (Some(_), None, _) => {
+                return Err(format!(
+                    "image {i} has a bufferView but no mimeType (glTF 2.0 requires one)"
+                ));
+            }
+            (None, _, None) => return Err(format!("image {i} has neither a uri nor a bufferView")),
+            _ => {}
+        }
+    }
+    for (i, camera) in root.cameras.iter().enumerate() {
+        use gltf::json::camera::Type;
+        use gltf::json::validation::Checked;
+        let consistent = match camera.type_ {
+            Checked::Valid(Type::Perspective) => camera.perspective.is_some(),
+            Checked::Valid(Type::Orthographic) => camera.orthographic.is_some(),
+            // The validator reports an invalid type.
+            Checked::Invalid => true,
+        };
+        if !consistent {
+            return Err(format!(
+                "camera {i}: its type names a projection the camera does not define"
+            ));
+        }
+    }
+    check_attribute_indices(root)
+}
+
+/// The accessors named by mesh primitive attributes exist.
 fn check_attribute_indices(root: &gltf::json::Root) -> Result<(), String> {
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, prim) in mesh.primitives.iter().enumerate() {
