@@ -20,6 +20,14 @@ use serde::{Deserialize, Serialize};
 
 use crate::{Error, Result};
 
+/// The narrowest vertical field of view a camera may have, in degrees.
+///
+/// Far below any real lens (a 1000 mm telephoto on full frame sees 1.4°), it
+/// keeps the camera frame away from f32 underflow: the image plane's half
+/// height is `tan(fov / 2)`, which for a field of view of 4e-44° (found by
+/// fuzzing) is 0, collapsing every pixel's ray into one.
+pub const MIN_FOV_Y_DEGREES: f32 = 1e-3;
+
 /// A pinhole camera looking from `eye` at `target`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -31,7 +39,7 @@ pub struct Camera {
     /// Up direction; only its component orthogonal to the view direction counts.
     #[serde(default = "default_up")]
     pub up: Vec3,
-    /// Vertical field of view in degrees, in (0, 180).
+    /// Vertical field of view in degrees, in [[`MIN_FOV_Y_DEGREES`], 180).
     pub fov_y_degrees: f32,
 }
 
@@ -188,7 +196,7 @@ impl Camera {
     /// The unit `(forward, right, up)` frame the renderer builds from the
     /// camera (see [`crate::frame::camera_params`]), or why there is none: eye
     /// and target at the same point, `up` zero or parallel to the view
-    /// direction, or `fov_y_degrees` outside (0, 180). Assumes finite fields
+    /// direction, or `fov_y_degrees` outside [[`MIN_FOV_Y_DEGREES`], 180). Assumes finite fields
     /// ([`Camera::validate`] checks them first).
     pub fn basis(&self) -> Result<(Vec3, Vec3, Vec3), String> {
         let to_target = self.target - self.eye;
@@ -217,9 +225,9 @@ impl Camera {
                 )
             })?
             .normalize();
-        if !(self.fov_y_degrees > 0.0 && self.fov_y_degrees < 180.0) {
+        if !(self.fov_y_degrees >= MIN_FOV_Y_DEGREES && self.fov_y_degrees < 180.0) {
             return Err(format!(
-                "camera.fov_y_degrees is {}, must be in (0, 180)",
+                "camera.fov_y_degrees is {}, must be in [{MIN_FOV_Y_DEGREES}, 180)",
                 self.fov_y_degrees
             ));
         }

@@ -143,12 +143,17 @@ fn degenerate_cameras() {
         },
         "camera.target - camera.eye = [inf, 0, 0] overflows f32",
     );
-    for fov in [0.0, -10.0, 180.0, 181.0] {
+    for fov in [0.0, -10.0, 180.0, 181.0, 0.0009] {
         refused(
             |v| v.camera.fov_y_degrees = fov,
-            &format!("camera.fov_y_degrees is {fov}, must be in (0, 180)"),
+            &format!("camera.fov_y_degrees is {fov}, must be in [0.001, 180)"),
         );
     }
+    // Found by fuzzing: tan(fov / 2) underflows to 0, so every pixel's ray is the same.
+    refused(
+        |v| v.camera.fov_y_degrees = 41e-45,
+        "camera.fov_y_degrees is 0.00000000000000000000000000000000000000000004, must be in [0.001, 180)",
+    );
 }
 
 #[test]
@@ -221,7 +226,7 @@ fn validated_views_give_finite_camera_and_light_data() {
     v.camera.fov_y_degrees = 179.999;
     views.push(v);
     let mut v = good();
-    v.camera.fov_y_degrees = 1e-6;
+    v.camera.fov_y_degrees = penumbra::view::MIN_FOV_Y_DEGREES;
     v.camera.up = Vec3::new(1e30, 1e30, 0.0);
     views.push(v);
     let mut v = good();
@@ -361,4 +366,21 @@ fn suspicious_views_pass_with_warnings() {
     let mut under = good();
     under.camera.eye = Vec3::new(3.0, -1.0, 3.0);
     assert_eq!(view_warnings(&under, &scene, &bvh), []);
+}
+
+#[test]
+fn inputs_that_crashed_the_fuzzer_are_refused() {
+    // Each file under tests/fuzz_regressions/view_parser/ once passed validation
+    // with a view the renderer cannot use (see README, "Fuzzing").
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions/view_parser");
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    assert!(!files.is_empty());
+    for file in files {
+        let err = View::load(&file).expect_err("refused");
+        eprintln!("{err}");
+    }
 }
