@@ -99,6 +99,29 @@ pub enum Error {
         /// What is wrong, in words.
         message: String,
     },
+    /// An image needs a per-pixel GPU buffer larger than one storage-buffer
+    /// binding of the adapter (checked before anything is allocated).
+    #[error(
+        "image {width}x{height} needs a {bytes}-byte `{what}` buffer, more than this adapter's \
+         limit of {limit} bytes per storage buffer; the largest image of this shape that fits is \
+         {largest_width}x{largest_height} (render smaller, or use an adapter with a larger limit)"
+    )]
+    ImageTooLarge {
+        /// Requested width in pixels.
+        width: u32,
+        /// Requested height in pixels.
+        height: u32,
+        /// The largest buffer (its label).
+        what: String,
+        /// Its size in bytes.
+        bytes: u64,
+        /// The adapter's limit in bytes.
+        limit: u64,
+        /// Width of the largest image of about the same aspect ratio that fits.
+        largest_width: u32,
+        /// Its height.
+        largest_height: u32,
+    },
     /// Any other GPU failure: a validation error, a failed buffer mapping, a lost device.
     #[error("GPU error: {0}")]
     Gpu(String),

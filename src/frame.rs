@@ -15,10 +15,11 @@ use crate::{Error, Result};
 pub const RAY_OFFSET_FRACTION: f32 = 1e-4;
 
 /// The camera for a `width`×`height` image (square pixels).
+///
+/// The frame is [`Camera::basis`]; a camera without one (which
+/// [`crate::view::View::validate`] refuses) gives NaN rays, which hit nothing.
 pub fn camera_params(camera: &Camera, width: u32, height: u32, ray_offset: f32) -> CameraParams {
-    let forward = (camera.target - camera.eye).normalize();
-    let right = forward.cross(camera.up).normalize();
-    let up = right.cross(forward);
+    let (forward, right, up) = camera.basis().unwrap_or((Vec3::NAN, Vec3::NAN, Vec3::NAN));
     let tan = (camera.fov_y_degrees.to_radians() * 0.5).tan();
     let aspect = width as f32 / height as f32;
     CameraParams {
@@ -110,22 +111,16 @@ pub struct ShadingData {
 }
 
 impl ShadingData {
-    /// Gathers and decodes; an image that cannot be read or decoded is an error naming it.
+    /// Gathers and decodes; an image that cannot be read or decoded is an
+    /// error naming the scene and the image file (a missing texture is an
+    /// error, not a silently untextured material: the albedo would be wrong).
     pub fn new(scene: &Scene, bvh: &Bvh) -> Result<ShadingData> {
         let mut textures = Vec::with_capacity(scene.images.len());
         let mut texels = Vec::new();
-        for (i, source) in scene.images.iter().enumerate() {
-            let (bytes, what) = match source {
-                ImageSource::File(path) => (
-                    std::fs::read(path).map_err(|e| {
-                        Error::scene(&scene.source, format!("image {i} '{}': {e}", path.display()))
-                    })?,
-                    path.display().to_string(),
-                ),
-                ImageSource::Embedded { bytes, .. } => (bytes.clone(), format!("embedded image {i}")),
-            };
+        for i in 0..scene.images.len() {
+            let (bytes, what) = image_bytes(scene, i)?;
             let image = image::load_from_memory(&bytes)
-                .map_err(|e| Error::scene(&scene.source, format!("{what}: cannot decode: {e}")))?
+                .map_err(|e| Error::scene(&scene.source, format!("{what}: cannot decode the texture: {e}")))?
                 .to_rgba8();
             textures.push(GpuTexture {
                 offset: texels.len() as u32,
@@ -170,6 +165,34 @@ impl ShadingData {
             }
         }
     }
+}
+
+/// Largest texture file read: a bound against a hostile scene naming a huge file.
+const MAX_TEXTURE_FILE_BYTES: u64 = 1 << 30;
+
+/// The encoded bytes of scene image `i` and how to name it in errors
+/// (`image 3 'textures/wood.png'` or `embedded image 3`).
+fn image_bytes(scene: &Scene, i: usize) -> Result<(std::borrow::Cow<'_, [u8]>, String)> {
+    match &scene.images[i] {
+        ImageSource::File(path) => {
+            let what = format!("image {i} '{}'", path.display());
+            let bytes = crate::scene::read_file_prefix(path, MAX_TEXTURE_FILE_BYTES)
+                .map_err(|e| Error::scene(&scene.source, format!("{what}: cannot read the texture: {e}")))?;
+            Ok((bytes.into(), what))
+        }
+        ImageSource::Embedded { bytes, .. } => Ok((bytes.as_slice().into(), format!("embedded image {i}"))),
+    }
+}
+
+/// Width and height of scene image `i`, from its header only (nothing is
+/// decoded); errors as for [`ShadingData::new`].
+pub fn texture_dimensions(scene: &Scene, i: usize) -> Result<(u32, u32)> {
+    let (bytes, what) = image_bytes(scene, i)?;
+    image::ImageReader::new(std::io::Cursor::new(&bytes[..]))
+        .with_guessed_format()
+        .map_err(|e| Error::scene(&scene.source, format!("{what}: {e}")))?
+        .into_dimensions()
+        .map_err(|e| Error::scene(&scene.source, format!("{what}: cannot decode the texture: {e}")))
 }
 
 fn srgb_to_linear(c: u8) -> f32 {

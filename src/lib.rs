@@ -37,5 +37,6 @@ pub mod sampling;
 pub mod scene;
 pub mod shaders;
 pub mod view;
+pub mod view_checks;
 
 pub use error::{Error, Result};

@@ -20,6 +20,14 @@ use serde::{Deserialize, Serialize};
 
 use crate::{Error, Result};
 
+/// The narrowest vertical field of view a camera may have, in degrees.
+///
+/// Far below any real lens (a 1000 mm telephoto on full frame sees 1.4°), it
+/// keeps the camera frame away from f32 underflow: the image plane's half
+/// height is `tan(fov / 2)`, which for a field of view of 4e-44° (found by
+/// fuzzing) is 0, collapsing every pixel's ray into one.
+pub const MIN_FOV_Y_DEGREES: f32 = 1e-3;
+
 /// A pinhole camera looking from `eye` at `target`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -31,7 +39,7 @@ pub struct Camera {
     /// Up direction; only its component orthogonal to the view direction counts.
     #[serde(default = "default_up")]
     pub up: Vec3,
-    /// Vertical field of view in degrees, in (0, 180).
+    /// Vertical field of view in degrees, in [[`MIN_FOV_Y_DEGREES`], 180).
     pub fov_y_degrees: f32,
 }
 
@@ -150,38 +158,171 @@ impl View {
         serde_json::to_string_pretty(self).expect("a View always serialises")
     }
 
-    /// Checks that the view describes a usable camera and light.
+    /// Checks that the view describes a usable camera and light: every number
+    /// finite, and everything the renderer derives from them (the camera's
+    /// basis, the light's unit normal and area, its radiance) finite and
+    /// non-degenerate. The message names the field at fault and its value.
+    ///
+    /// Legal but suspicious views (a light that faces away from the whole
+    /// scene, a camera inside a closed object) pass; see
+    /// [`crate::view_checks`] for the warnings the CLI prints about them.
     pub fn validate(&self) -> Result<(), String> {
-        let c = &self.camera;
-        let l = &self.light;
-        let finite = [c.eye, c.target, c.up, l.corner, l.edge_u, l.edge_v, l.color]
-            .iter()
-            .all(|v| v.is_finite())
-            && c.fov_y_degrees.is_finite()
-            && l.intensity.is_finite()
-            && self.ground_y.is_none_or(f32::is_finite);
-        if !finite {
-            return Err("view has a non-finite number (NaN or infinity)".into());
+        self.camera.validate()?;
+        self.light.validate()?;
+        match self.ground_y {
+            Some(y) if !y.is_finite() => Err(format!("ground_y {y} is not finite")),
+            _ => Ok(()),
         }
-        let dir = c.target - c.eye;
-        if dir.length_squared() == 0.0 {
-            return Err("camera eye and target are the same point".into());
-        }
-        if dir.cross(c.up).length_squared() <= 1e-12 * dir.length_squared() * c.up.length_squared() {
-            return Err("camera up is zero or parallel to the view direction".into());
-        }
-        if !(c.fov_y_degrees > 0.0 && c.fov_y_degrees < 180.0) {
+    }
+}
+
+impl Camera {
+    /// Checks that the camera gives a view: finite fields and a [`Camera::basis`].
+    pub fn validate(&self) -> Result<(), String> {
+        check_finite(&[
+            ("camera.eye", self.eye),
+            ("camera.target", self.target),
+            ("camera.up", self.up),
+        ])?;
+        if !self.fov_y_degrees.is_finite() {
             return Err(format!(
-                "camera fov_y_degrees is {}, must be in (0, 180)",
-                c.fov_y_degrees
+                "camera.fov_y_degrees {} is not finite",
+                self.fov_y_degrees
             ));
         }
-        if l.area_normal().length_squared() == 0.0 {
-            return Err("light has zero area (edge_u and edge_v are parallel or zero)".into());
+        self.basis().map(|_| ())
+    }
+
+    /// The unit `(forward, right, up)` frame the renderer builds from the
+    /// camera (see [`crate::frame::camera_params`]), or why there is none: eye
+    /// and target at the same point, `up` zero or parallel to the view
+    /// direction, or `fov_y_degrees` outside [[`MIN_FOV_Y_DEGREES`], 180). Assumes finite fields
+    /// ([`Camera::validate`] checks them first).
+    pub fn basis(&self) -> Result<(Vec3, Vec3, Vec3), String> {
+        let to_target = self.target - self.eye;
+        let forward = direction(to_target).ok_or_else(|| {
+            if self.eye == self.target {
+                format!(
+                    "camera.eye and camera.target are the same point {}",
+                    show_vec(self.eye)
+                )
+            } else {
+                format!(
+                    "camera.target - camera.eye = {} overflows f32",
+                    show_vec(to_target)
+                )
+            }
+        })?;
+        // sin(angle) below 1e-6: the image's horizontal axis would be mostly rounding noise.
+        let right = direction(self.up)
+            .map(|up| forward.cross(up))
+            .filter(|r| r.length_squared() > 1e-12)
+            .ok_or_else(|| {
+                format!(
+                    "camera.up {} is zero or parallel to the view direction {}",
+                    show_vec(self.up),
+                    show_vec(forward)
+                )
+            })?
+            .normalize();
+        if !(self.fov_y_degrees >= MIN_FOV_Y_DEGREES && self.fov_y_degrees < 180.0) {
+            return Err(format!(
+                "camera.fov_y_degrees is {}, must be in [{MIN_FOV_Y_DEGREES}, 180)",
+                self.fov_y_degrees
+            ));
         }
-        if l.intensity < 0.0 || l.color.min_element() < 0.0 {
-            return Err("light color and intensity must not be negative".into());
+        Ok((forward, right, right.cross(forward)))
+    }
+}
+
+/// `v` scaled to unit length, or `None` when it is zero or not finite. Scaled
+/// by its largest component first, so that tiny and huge vectors, whose
+/// squared length under- or overflows f32, still have a direction.
+fn direction(v: Vec3) -> Option<Vec3> {
+    let largest = v.abs().max_element();
+    if !largest.is_finite() || largest == 0.0 {
+        return None;
+    }
+    (v / largest).try_normalize()
+}
+
+impl QuadLight {
+    /// Checks what the shading needs: finite fields, a unit normal and a
+    /// finite, non-zero area, finite corners, non-negative colour and
+    /// intensity, and a finite radiance.
+    pub fn validate(&self) -> Result<(), String> {
+        check_finite(&[
+            ("light.corner", self.corner),
+            ("light.edge_u", self.edge_u),
+            ("light.edge_v", self.edge_v),
+            ("light.color", self.color),
+        ])?;
+        if !self.intensity.is_finite() {
+            return Err(format!("light.intensity {} is not finite", self.intensity));
+        }
+        let n = self.area_normal();
+        let area = n.length();
+        if n.try_normalize().is_none() {
+            return Err(if area.is_finite() {
+                format!(
+                    "light has zero area: |edge_u × edge_v| = {area} (edge_u {} and edge_v {} are zero, \
+                     parallel or too short)",
+                    show_vec(self.edge_u),
+                    show_vec(self.edge_v)
+                )
+            } else {
+                format!(
+                    "light is too large: |edge_u × edge_v|² overflows f32 (edge_u {}, edge_v {})",
+                    show_vec(self.edge_u),
+                    show_vec(self.edge_v)
+                )
+            });
+        }
+        // Corners beyond f32 range would make light samples infinite.
+        let corners = [
+            self.corner + self.edge_u,
+            self.corner + self.edge_v,
+            self.corner + self.edge_u + self.edge_v,
+            self.center(),
+        ];
+        if let Some(p) = corners.iter().find(|p| !p.is_finite()) {
+            return Err(format!(
+                "light reaches past the f32 range (a corner or its centre is {})",
+                show_vec(*p)
+            ));
+        }
+        if self.intensity < 0.0 {
+            return Err(format!(
+                "light.intensity is {}, must not be negative",
+                self.intensity
+            ));
+        }
+        if self.color.min_element() < 0.0 {
+            return Err(format!(
+                "light.color {} has a negative component",
+                show_vec(self.color)
+            ));
+        }
+        if !(self.color * self.intensity).is_finite() {
+            return Err(format!(
+                "light radiance color × intensity = {} × {} overflows f32",
+                show_vec(self.color),
+                self.intensity
+            ));
         }
         Ok(())
     }
+}
+
+/// An error naming the first of `fields` that has a NaN or infinite component.
+fn check_finite(fields: &[(&str, Vec3)]) -> Result<(), String> {
+    match fields.iter().find(|(_, v)| !v.is_finite()) {
+        Some((name, v)) => Err(format!("{name} {} is not finite", show_vec(*v))),
+        None => Ok(()),
+    }
+}
+
+/// `[x, y, z]` with each number as Rust prints an `f32` (`NaN`, `inf` included).
+fn show_vec(v: Vec3) -> String {
+    format!("[{}, {}, {}]", v.x, v.y, v.z)
 }

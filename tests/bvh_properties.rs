@@ -92,7 +92,10 @@ fn structure_check_can_fail() {
     // Shrink a leaf's box: the containment check must notice.
     let leaf = bvh.nodes.iter().position(|n| n.is_leaf()).unwrap();
     let max_leaf = BvhSettings::default().max_leaf_size;
-    assert!(check_structure(&corners, &bvh, max_leaf).is_ok(), "the built tree passes");
+    assert!(
+        check_structure(&corners, &bvh, max_leaf).is_ok(),
+        "the built tree passes"
+    );
     bvh.nodes[leaf].bmax = bvh.nodes[leaf].bmin;
     assert!(check_structure(&corners, &bvh, max_leaf).is_err());
 }

@@ -81,3 +81,95 @@ fn bad_flags_are_usage_errors() {
     assert!(help.status.success());
     assert!(text(&help.stdout).contains("info"));
 }
+
+#[test]
+fn verbose_adds_the_source_chain_and_detail() {
+    let quiet = penumbra(&["info", "/no/such/scene.glb"]);
+    let io = std::fs::read("/no/such/scene.glb").unwrap_err();
+    assert_eq!(text(&quiet.stderr), format!("error: /no/such/scene.glb: {io}\n"));
+    // A global flag: before or after the subcommand.
+    for args in [
+        ["info", "/no/such/scene.glb", "--verbose"],
+        ["--verbose", "info", "/no/such/scene.glb"],
+    ] {
+        let out = penumbra(&args);
+        assert_eq!(out.status.code(), Some(1));
+        let stderr = text(&out.stderr);
+        let lines: Vec<&str> = stderr.lines().collect();
+        assert_eq!(lines.len(), 3, "{stderr}");
+        assert_eq!(lines[0], format!("error: /no/such/scene.glb: {io}"));
+        assert_eq!(lines[1], format!("caused by: {io}"));
+        assert!(
+            lines[2].starts_with("detail: Io { path: \"/no/such/scene.glb\", source: Os {"),
+            "{stderr}"
+        );
+    }
+}
+
+#[test]
+fn bad_views_are_one_line_naming_the_file_and_field() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli_views");
+    std::fs::create_dir_all(&dir).unwrap();
+    let camera = r#""camera": {"eye": [0, 5, 9], "target": [0, 0, 0], "fov_y_degrees": 50}"#;
+    for (name, json, message) in [
+        (
+            "flat_light.json",
+            format!(
+                r#"{{{camera}, "light": {{"corner": [0, 9, 0], "edge_u": [1, 0, 0], "edge_v": [3, 0, 0]}}}}"#
+            ),
+            "light has zero area: |edge_u × edge_v| = 0 (edge_u [1, 0, 0] and edge_v [3, 0, 0] are zero, \
+             parallel or too short)",
+        ),
+        (
+            "dark_light.json",
+            format!(
+                r#"{{{camera}, "light": {{"corner": [0, 9, 0], "edge_u": [1, 0, 0], "edge_v": [0, 0, -1], "intensity": -2}}}}"#
+            ),
+            "light.intensity is -2, must not be negative",
+        ),
+        (
+            "far_eye.json",
+            r#"{"camera": {"eye": [0, 5e38, 9], "target": [0, 0, 0], "fov_y_degrees": 50},
+                "light": {"corner": [0, 9, 0], "edge_u": [1, 0, 0], "edge_v": [0, 0, -1]}}"#
+                .to_owned(),
+            "camera.eye [0, inf, 9] is not finite",
+        ),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, json).unwrap();
+        // The view is checked before any GPU work, so this needs no adapter.
+        let out = penumbra(&["render", "--view", path.to_str().unwrap(), "-o", "never.png"]);
+        assert_eq!(out.status.code(), Some(1), "{name}");
+        assert_eq!(
+            text(&out.stderr),
+            format!("error: {}: {message}\n", path.display()),
+            "{name}"
+        );
+    }
+}
+
+#[test]
+fn info_reports_gpu_memory_for_a_size() {
+    let out = penumbra(&["info"]);
+    let stdout = text(&out.stdout);
+    assert!(stdout.contains("GPU memory"), "{stdout}");
+    assert!(
+        stdout.contains("  frame      162.00 MiB for 1024x1024 (G-buffer 64.00 MiB, "),
+        "{stdout}"
+    );
+    let out = penumbra(&["info", "lattice", "--size", "7x1"]);
+    assert!(out.status.success());
+    let stdout = text(&out.stdout);
+    let frame = stdout.lines().find(|l| l.starts_with("  frame")).unwrap();
+    assert!(
+        frame.contains("for 7x1 (G-buffer 448 B, shadow masks 28 B,"),
+        "{frame}"
+    );
+    let scene = stdout.lines().find(|l| l.starts_with("  scene")).unwrap();
+    assert!(
+        scene.contains("BVH nodes") && scene.contains("texels 16 B"),
+        "{scene}"
+    );
+    let out = penumbra(&["info", "--size", "0x5"]);
+    assert_eq!(out.status.code(), Some(2), "a usage error");
+}

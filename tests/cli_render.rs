@@ -155,3 +155,148 @@ fn leaf_mode_is_selectable_and_reported() {
         assert!(vector.contains(reported), "--leaf-mode {mode}:\n{stdout}");
     }
 }
+
+/// Runs the binary in `dir` without asserting success. `XDG_RUNTIME_DIR` is
+/// set because without it the Vulkan loader prints lines of its own on
+/// stderr, and these tests check that stderr holds exactly penumbra's lines.
+fn run(dir: &Path, args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .args(args)
+        .current_dir(dir)
+        .env("XDG_RUNTIME_DIR", dir)
+        .output()
+        .unwrap()
+}
+
+/// Every entry of `dir`, sorted.
+fn entries(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn an_image_too_large_for_the_device_names_the_limit() {
+    let dir = out_dir("too_large");
+    let out = run(&dir, &["render", "--size", "100000x100000", "-o", "big.png"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    let line = stderr.lines().next().unwrap();
+    let prefix = "error: GPU error: image size 100000x100000: this adapter's largest image side \
+                  (max_texture_dimension_2d) is ";
+    let rest = line.strip_prefix(prefix).unwrap_or_else(|| panic!("{line}"));
+    let limit: u32 = rest.strip_suffix(" pixels").unwrap().parse().unwrap();
+    assert!(limit >= 2048, "{line}");
+    assert!(!dir.join("big.png").exists());
+}
+
+#[test]
+fn legal_but_suspicious_views_render_with_a_warning() {
+    let dir = out_dir("view_warnings");
+    let view = r#"{"camera": {"eye": [-13.5, 1.8, 0], "target": [0, 4, 0], "fov_y_degrees": 60},
+                   "light": {"corner": [1.5, 40, -7.5], "edge_u": [0, 0, 5], "edge_v": [5, 0, 0]}}"#;
+    std::fs::write(dir.join("up.json"), view).unwrap();
+    let out = run(
+        &dir,
+        &["render", "--view", "up.json", "--size", "8x8", "-o", "up.png"],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert_eq!(
+        stderr,
+        "warning: up.json: the light faces away from the whole scene (every vertex is behind its \
+         plane; it emits toward [0, 1, 0]): every surface is unlit\n"
+    );
+    let image = read_hdr_image(&dir.join("up.png")).unwrap();
+    assert!(
+        image.pixels.iter().all(|p| *p == [0.0; 3]),
+        "an unlit image is black"
+    );
+}
+
+#[test]
+fn a_failed_render_leaves_the_previous_image_intact() {
+    let dir = out_dir("intact");
+    let good = run(&dir, &["render", "lattice", "--size", "16x16", "-o", "out.png"]);
+    assert!(good.status.success(), "{}", String::from_utf8_lossy(&good.stderr));
+    let before = std::fs::read(dir.join("out.png")).unwrap();
+    std::fs::write(dir.join("bad.json"), "{\"camera\": 1}").unwrap();
+    for args in [
+        // Fails reading the view, before any GPU work.
+        vec!["render", "--view", "bad.json", "-o", "out.png"],
+        // Fails at the device limit, after the scene and the GPU are set up.
+        vec!["render", "--size", "100000x100000", "-o", "out.png"],
+        // Fails at an unsupported option value.
+        vec!["render", "--spp", "4", "-o", "out.png"],
+    ] {
+        let out = run(&dir, &args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
+        assert!(stderr.starts_with("error: "), "{args:?}: {stderr}");
+        assert_eq!(std::fs::read(dir.join("out.png")).unwrap(), before, "{args:?}");
+        assert_eq!(
+            entries(&dir),
+            ["bad.json", "out.png"],
+            "{args:?}: no temporary file"
+        );
+    }
+}
+
+#[test]
+fn an_interrupted_render_leaves_the_old_image_or_the_whole_new_one() {
+    let dir = out_dir("interrupted");
+    let good = run(&dir, &["render", "lattice", "--size", "8x8", "-o", "out.png"]);
+    assert!(good.status.success(), "{}", String::from_utf8_lossy(&good.stderr));
+    let before = std::fs::read(dir.join("out.png")).unwrap();
+    let mut outcomes = Vec::new();
+    for delay_ms in [50, 1000, 2500] {
+        // The workgroup vector is the slow one: the kill lands mid-render.
+        let mut child = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+            .args([
+                "render",
+                "lattice",
+                "--size",
+                "160x160",
+                "--vector",
+                "workgroup",
+                "-o",
+                "out.png",
+            ])
+            .current_dir(&dir)
+            .env("XDG_RUNTIME_DIR", &dir)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(delay_ms));
+        let finished = child.try_wait().unwrap().is_some();
+        child.kill().unwrap();
+        child.wait().unwrap();
+        let now = std::fs::read(dir.join("out.png")).unwrap();
+        let outcome = if now == before {
+            "old image intact"
+        } else {
+            let image = read_hdr_image(&dir.join("out.png")).expect("a whole new image");
+            assert_eq!((image.width, image.height), (160, 160));
+            "whole new image"
+        };
+        outcomes.push(format!(
+            "killed after {delay_ms} ms (finished: {finished}): {outcome}"
+        ));
+        assert_eq!(
+            entries(&dir),
+            ["out.png"],
+            "no temporary file after a kill at {delay_ms} ms"
+        );
+    }
+    eprintln!("{}", outcomes.join("\n"));
+    assert!(
+        outcomes.iter().any(|o| o.contains("finished: false")),
+        "no kill landed before the end of the render: {outcomes:?}"
+    );
+}

@@ -672,7 +672,7 @@ fn cli_free_sizes() {
     let points = sampling::light_points(&view.light);
     for variant in variants() {
         let renderer = Renderer::new(ctx(), Some(variant)).unwrap();
-        for (w, h) in [(1u32, 1u32), (5, 3), (17, 33)] {
+        for (w, h) in [(1u32, 1u32), (1, 7), (7, 1), (5, 3), (17, 33)] {
             let n = (w * h) as usize;
             let mut settings = FrameSettings::new(w, h);
             settings.keep_gbuffer = true;
@@ -730,6 +730,30 @@ fn cli_free_sizes() {
             .render(ctx(), &gpu_scene, &view, &FrameSettings::new(w, h))
             .expect_err("an empty image must be refused");
         eprintln!("{w}x{h}: {err}");
+    }
+    // A forced tile too large for one storage buffer: refused before anything is
+    // allocated, naming the limit and the largest image that fits. (Unforced, the
+    // renderer picks tiles that fit: tests/gpu_tiles.rs.)
+    let limit = penumbra::gpu::memory::storage_limit(ctx());
+    let side = ((limit / 64) as f64).sqrt() as u32 + 64; // a G-buffer over the limit
+    let mut settings = FrameSettings::new(side, side);
+    settings.max_tile = Some(side);
+    let err = renderer
+        .render(ctx(), &gpu_scene, &view, &settings)
+        .expect_err("a tile beyond the device's buffer limit must be refused");
+    eprintln!("{side}x{side} in one tile: {err}");
+    match err {
+        penumbra::Error::ImageTooLarge {
+            limit: l,
+            largest_width,
+            largest_height,
+            ..
+        } => {
+            assert_eq!(l, limit);
+            let fits = FrameSettings::new(largest_width, largest_height);
+            assert!(penumbra::gpu::memory::check_frame_fits(limit, fits.width, fits.height).is_ok());
+        }
+        other => panic!("expected ImageTooLarge, got {other:?}"),
     }
     eprintln!("cli_free_sizes: {:.1} s", start.elapsed().as_secs_f64());
 }

@@ -5,6 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
+use penumbra::bvh::{Bvh, BvhSettings};
+use penumbra::frame::{ShadingData, texture_dimensions};
 use penumbra::scene::Scene;
 use penumbra::{Error, assets};
 use serde_json::{Value, json};
@@ -392,18 +394,103 @@ fn out_of_range_index() {
     );
 }
 
+/// Asserts that loading fails with exactly `expected`.
+fn assert_exact_error(result: Result<Scene, Error>, expected: &str) {
+    match result {
+        Ok(s) => panic!("expected '{expected}', loaded {} triangles", s.triangles.len()),
+        Err(e) => assert_eq!(e.to_string(), expected),
+    }
+}
+
 #[test]
-fn nan_and_infinite_positions() {
-    for bad in [f32::NAN, f32::INFINITY] {
+fn nan_and_infinite_positions_drop_their_triangles() {
+    for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+        // Vertex 1 (bytes 12..24) is only in the first triangle.
+        let mut f = TestFile::quad();
+        f.bin[16..20].copy_from_slice(&bad.to_le_bytes());
+        let s = load_glb(&f.glb()).unwrap();
+        assert_eq!(s.triangles.len(), 1, "{bad}");
+        assert_eq!(s.warnings.non_finite_triangles, 1, "{bad}");
+        assert_eq!(s.warnings.degenerate_triangles, 0, "{bad}");
+        assert_eq!(
+            s.warnings.messages(),
+            ["dropped 1 triangle(s) with non-finite (NaN or infinite) positions"]
+        );
+        assert!(
+            s.triangles
+                .iter()
+                .all(|t| t.positions.iter().all(|p| p.is_finite()))
+        );
+        // Vertex 0 is in both: nothing is left, which is an error.
         let mut f = TestFile::quad();
         f.bin[4..8].copy_from_slice(&bad.to_le_bytes());
-        assert_error(load_glb(&f.glb()), "test.glb", "element 0 is not finite");
+        assert_exact_error(
+            load_glb(&f.glb()),
+            "test.glb: scene 0 has no triangles (0 point/line primitives, 0 zero-area and 2 \
+             non-finite triangles skipped)",
+        );
     }
+}
+
+#[test]
+fn positions_overflowing_the_node_transform_drop_their_triangles() {
+    // Finite in the file, infinite in the world: 1e20 × 1e19 overflows f32
+    // (while the other triangle's area, about 1e38, still fits).
     let mut f = TestFile::quad();
-    f.json["nodes"][0]["scale"] = json!([1e30, 1e30, 1e30]);
-    f.json["nodes"][0]["translation"] = json!([0.0, 0.0, 0.0]);
-    f.bin[0..4].copy_from_slice(&1e20f32.to_le_bytes());
-    assert_error(load_glb(&f.glb()), "test.glb", "not finite");
+    f.json["nodes"][0]["scale"] = json!([1e19, 1e19, 1e19]);
+    f.bin[16..20].copy_from_slice(&1e20f32.to_le_bytes());
+    let s = load_glb(&f.glb()).unwrap();
+    assert_eq!((s.triangles.len(), s.warnings.non_finite_triangles), (1, 1));
+
+    // A node whose transform is not finite (1e39 is infinite as an f32) loses
+    // its triangles; the other node keeps its own.
+    let mut f = TestFile::quad();
+    f.json["scenes"] = json!([{"nodes": [0, 1]}]);
+    f.json["nodes"] = json!([{"mesh": 0}, {"mesh": 0, "scale": [1e39, 1.0, 1.0]}]);
+    let s = load_glb(&f.glb()).unwrap();
+    assert_eq!(s.triangles.len(), 2);
+    assert_eq!(s.warnings.non_finite_triangles, 2);
+    assert!(s.triangles.iter().all(|t| t.instance == 0));
+}
+
+#[test]
+fn non_finite_normals_fall_back_to_the_face_normal() {
+    let mut f = TestFile::quad();
+    let normals: Vec<u8> = [
+        [0.0, 0.0, 1.0],
+        [f32::NAN, 0.0, 1.0],
+        [0.0, f32::INFINITY, 0.0],
+        [0.0; 3],
+    ]
+    .iter()
+    .flatten()
+    .flat_map(|c: &f32| c.to_le_bytes())
+    .collect();
+    let view = f.add_view(&normals);
+    let acc = f.add_accessor(json!({"bufferView": view, "componentType": 5126, "count": 4, "type": "VEC3"}));
+    f.primitive()["attributes"]["NORMAL"] = json!(acc);
+    let s = load_glb(&f.glb()).unwrap();
+    assert_eq!(s.warnings, Default::default());
+    for t in &s.triangles {
+        assert_eq!(
+            t.normals,
+            [Vec3::Z; 3],
+            "every normal is usable or replaced by the face's"
+        );
+    }
+}
+
+#[test]
+fn unusable_file_cameras_are_ignored_and_counted() {
+    // A vertical field of view of 3.2 radians (183°) gives no image.
+    let mut f = TestFile::quad();
+    f.json["scenes"] = json!([{"nodes": [0, 1]}]);
+    f.json["nodes"] = json!([{"mesh": 0}, {"camera": 0}]);
+    f.json["cameras"] = json!([{"type": "perspective", "perspective": {"yfov": 3.2, "znear": 0.1}}]);
+    let s = load_glb(&f.glb()).unwrap();
+    assert_eq!(s.camera, None);
+    assert_eq!(s.warnings.unusable_cameras, 1);
+    assert_eq!(s.warnings.messages(), ["ignored 1 unusable camera(s)"]);
 }
 
 #[test]
@@ -455,4 +542,95 @@ fn garbage_never_panics() {
     }
     let _ = load_glb(b"");
     let _ = Scene::from_bytes(b"{\"asset\":{\"version\":\"2.0\"}}", Path::new("x.gltf"));
+}
+
+#[test]
+fn missing_or_unreadable_texture_is_an_error_naming_the_file() {
+    let mut f = TestFile::quad();
+    f.json["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+    f.json["textures"] = json!([{"source": 0}]);
+    f.json["images"] = json!([{"uri": "wood.png"}]);
+    f.primitive()["material"] = json!(0);
+    let path = f.write_gltf("missing_texture");
+    let texture = path.with_file_name("wood.png");
+    let _ = std::fs::remove_file(&texture);
+    let _ = std::fs::remove_dir(&texture);
+    // Textures are read when a renderer needs them, not by the loader.
+    let scene = Scene::load(&path).unwrap();
+    let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
+    let prefix = format!("{}: image 0 '{}'", path.display(), texture.display());
+
+    let io = std::fs::read(&texture).unwrap_err();
+    let expected = format!("{prefix}: cannot read the texture: {io}");
+    assert_eq!(ShadingData::new(&scene, &bvh).unwrap_err().to_string(), expected);
+    assert_eq!(texture_dimensions(&scene, 0).unwrap_err().to_string(), expected);
+
+    std::fs::write(&texture, b"not an image").unwrap();
+    let expected = format!("{prefix}: cannot decode the texture: The image format could not be determined");
+    assert_eq!(ShadingData::new(&scene, &bvh).unwrap_err().to_string(), expected);
+    assert_eq!(texture_dimensions(&scene, 0).unwrap_err().to_string(), expected);
+
+    std::fs::remove_file(&texture).unwrap();
+    std::fs::create_dir(&texture).unwrap();
+    let expected = format!("{prefix}: cannot read the texture: not a regular file");
+    assert_eq!(ShadingData::new(&scene, &bvh).unwrap_err().to_string(), expected);
+    std::fs::remove_dir(&texture).unwrap();
+
+    // A real texture loads, and its size is read from the header alone.
+    image::RgbaImage::from_pixel(3, 2, image::Rgba([255, 0, 0, 255]))
+        .save(&texture)
+        .unwrap();
+    assert_eq!(texture_dimensions(&scene, 0).unwrap(), (3, 2));
+    let data = ShadingData::new(&scene, &bvh).unwrap();
+    assert_eq!(data.texels.len(), 6);
+}
+
+#[test]
+fn what_the_gltf_crate_would_unwrap_is_an_error() {
+    // Found by fuzzing: the gltf crate unwraps these when the image is read.
+    let mut f = TestFile::quad();
+    f.json["images"] = json!([{"name": "nothing"}]);
+    assert_exact_error(
+        load_glb(&f.glb()),
+        "test.glb: image 0 has neither a uri nor a bufferView",
+    );
+    let mut f = TestFile::quad();
+    f.json["images"] = json!([{"bufferView": 0}]);
+    assert_exact_error(
+        load_glb(&f.glb()),
+        "test.glb: image 0 has a bufferView but no mimeType (glTF 2.0 requires one)",
+    );
+    // Found reading the gltf crate after that: the projection is unwrapped by type.
+    let mut f = TestFile::quad();
+    f.json["cameras"] = json!([{"type": "perspective", "orthographic":
+        {"xmag": 1.0, "ymag": 1.0, "zfar": 10.0, "znear": 0.1}}]);
+    f.json["nodes"] = json!([{"mesh": 0, "camera": 0}]);
+    assert_exact_error(
+        load_glb(&f.glb()),
+        "test.glb: camera 0: its type names a projection the camera does not define",
+    );
+}
+
+#[test]
+fn inputs_that_crashed_the_fuzzer_are_errors() {
+    // Each file under tests/fuzz_regressions/scene_loader/ once panicked the loader
+    // (see README, "Fuzzing"); loaded as the fuzz target loads it.
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions/scene_loader");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    assert!(!files.is_empty());
+    for file in files {
+        let bytes = std::fs::read(&file).unwrap();
+        for name in [
+            "/nonexistent-fuzz-dir/fuzz.glb",
+            "/nonexistent-fuzz-dir/fuzz.gltf",
+        ] {
+            let err = Scene::from_bytes(&bytes, Path::new(name))
+                .expect_err(&format!("{}: a malformed file", file.display()));
+            eprintln!("{}: {err}", file.display());
+        }
+    }
 }

@@ -55,6 +55,14 @@ pub(super) fn build(corners: &[[Vec3; 3]], settings: &BvhSettings) -> Result<Bvh
             corners.len()
         )));
     }
+    // Non-finite corners would poison every box above them; the loader drops such
+    // triangles, so here they can only come from a caller's own corners.
+    if let Some(i) = corners.iter().position(|c| !c.iter().all(|p| p.is_finite())) {
+        return Err(Error::Bvh(format!(
+            "triangle {i} has a non-finite corner {:?}; drop such triangles before building",
+            corners[i]
+        )));
+    }
     let start = Instant::now();
     let tris: Vec<Triangle> = corners
         .iter()

@@ -21,7 +21,8 @@ use penumbra::{Error, Result, assets};
 use serde::Serialize;
 
 use super::BvhArgs;
-use super::render::{VectorArg, parse_size};
+use super::parse_size;
+use super::render::VectorArg;
 
 /// Views for the scenes of `../shared/scenes/` (their README's "views that give
 /// interesting soft shadows"), by file name: `(file, view name, view JSON)`.
@@ -414,7 +415,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 );
                 let mut times = Vec::new();
                 for run in 0..=args.runs {
-                    eprint!(
+                    progress!(
                         "\r{label}: {} {:30}",
                         if run == 0 {
                             "warm-up".to_owned()
@@ -432,7 +433,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 }
                 let counters = match counting {
                     Some(r) => {
-                        eprint!("\r{label}: counting {:30}", "");
+                        progress!("\r{label}: counting {:30}", "");
                         Some(
                             r.render(&ctx, &gpu_scene, &case.view, &frame_settings)?
                                 .shadow_stats
@@ -452,7 +453,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     counters,
                 });
             }
-            eprint!("\r{:100}\r", "");
+            progress!("\r{:100}\r", "");
             let mft_median = tracer_results[0].shadow_ms_median;
             for t in &mut tracer_results {
                 t.mft_speedup = t.shadow_ms_median / mft_median;
@@ -476,7 +477,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             let moving = default_moving_instance(&case.scene).filter(|_| args.animate_frames > 0);
             let animation = match moving {
                 Some(instance) => {
-                    eprint!(
+                    progress!(
                         "\ranimating instance {instance} for {} frames…   ",
                         args.animate_frames
                     );
@@ -488,7 +489,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                         args.animate_frames,
                         MotionSettings::default(),
                     )?;
-                    eprint!("\r{:60}\r", "");
+                    progress!("\r{:60}\r", "");
                     Some(AnimationResult::of(&report))
                 }
                 None => None,
@@ -552,7 +553,7 @@ fn bench_primary(
         let pass = PrimaryPass::new(ctx, tracer, args.vector.forced(), false)?;
         let mut times = Vec::new();
         for run in 0..=args.runs {
-            eprint!("\rprimary {tracer:?}: run {run}/{}   ", args.runs);
+            progress!("\rprimary {tracer:?}: run {run}/{}   ", args.runs);
             let mut timer = GpuTimer::new(ctx, 4);
             pass.run(ctx, scene, &camera, &gbuffer, Some(&mut timer))?;
             if run > 0 {
@@ -578,7 +579,7 @@ fn bench_primary(
             counters,
         });
     }
-    eprint!("\r{:60}\r", "");
+    progress!("\r{:60}\r", "");
     let mft = out[0].primary_ms_median;
     for p in &mut out {
         p.mft_speedup = p.primary_ms_median / mft;

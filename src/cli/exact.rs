@@ -41,13 +41,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         scene.bounds().diagonal() * RAY_OFFSET_FRACTION,
     );
     let gbuffer = primary_gbuffer(&bvh, &ShadingData::new(&scene, &bvh)?, &camera);
-    let progress = |rows: usize| eprint!("\rexact     {rows}/{height} rows   ");
+    let progress = |rows: usize| progress!("\rexact     {rows}/{height} rows   ");
     let options = ExactImageOptions {
         budget: Some(Duration::from_secs_f64(args.time_budget.max(0.0))),
         on_row: Some(&progress),
     };
     let visibility = exact_visibility_image_with(&bvh, &gbuffer, width, height, &view.light, &options);
-    eprint!("\r{:40}\r", "");
+    progress!("\r{:40}\r", "");
     let visibility = visibility?;
     let seconds = start.elapsed().as_secs_f64();
     println!(

@@ -4,6 +4,9 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use penumbra::bvh::Bvh;
+use penumbra::frame::texture_dimensions;
+use penumbra::gpu::memory;
+use penumbra::scene::Scene;
 
 use super::BvhArgs;
 use super::scene_arg::{builtin_names, load_scene};
@@ -16,6 +19,9 @@ pub struct InfoArgs {
         "glTF 2.0 file (.gltf or .glb), or the name of a built-in scene ({}). \
          Without it, the built-in default scene.", builtin_names()))]
     scene: Option<PathBuf>,
+    /// Image size WIDTHxHEIGHT for the per-frame GPU memory estimate.
+    #[arg(long, default_value = "1024x1024", value_parser = super::parse_size)]
+    size: (u32, u32),
     #[command(flatten)]
     bvh: BvhArgs,
 }
@@ -69,5 +75,52 @@ pub fn run(args: &InfoArgs) -> penumbra::Result<()> {
     println!("  max depth  {}", stats.max_depth);
     println!("  SAH cost   {:.2}", stats.sah_cost);
     println!("  GPU bytes  {} (nodes + triangles)", stats.gpu_bytes);
+    print_memory(&scene, &bvh, args.size);
     Ok(())
+}
+
+/// The GPU memory of the scene's buffers and of one frame of `size`.
+fn print_memory(scene: &Scene, bvh: &Bvh, (width, height): (u32, u32)) {
+    let mut texels = 0u64;
+    for i in 0..scene.images.len() {
+        // Only the headers are read; a texture that cannot be read is reported
+        // here and fails a render, which decodes every texture.
+        match texture_dimensions(scene, i) {
+            Ok((w, h)) => texels += u64::from(w) * u64::from(h),
+            Err(e) => println!("warning      {e}; not counted below"),
+        }
+    }
+    let list = |buffers: &[memory::BufferSize]| {
+        buffers
+            .iter()
+            .map(|b| format!("{} {}", b.label, memory::format_bytes(b.bytes)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let scene_buffers = memory::scene_buffers(&memory::SceneCounts::new(scene, bvh, texels));
+    let frame_buffers = memory::frame_buffers(width, height);
+    println!("GPU memory");
+    println!(
+        "  scene      {} ({})",
+        memory::format_bytes(memory::total_bytes(&scene_buffers)),
+        list(&scene_buffers)
+    );
+    println!(
+        "  frame      {} for {width}x{height} ({})",
+        memory::format_bytes(memory::total_bytes(&frame_buffers)),
+        list(&frame_buffers)
+    );
+    if let Some(big) = memory::largest(
+        &scene_buffers
+            .iter()
+            .chain(&frame_buffers)
+            .copied()
+            .collect::<Vec<_>>(),
+    ) {
+        println!(
+            "  largest    {} {} (must fit the adapter's storage-buffer binding limit)",
+            big.label,
+            memory::format_bytes(big.bytes)
+        );
+    }
 }

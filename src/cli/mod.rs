@@ -1,5 +1,15 @@
 //! Command-line interface definitions and dispatch.
 
+/// `eprint!` for progress lines: only when stderr is a terminal, so that logs and
+/// tests see warnings and errors alone.
+macro_rules! progress {
+    ($($arg:tt)*) => {
+        if std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+            eprint!($($arg)*);
+        }
+    };
+}
+
 mod bench;
 mod compare;
 mod exact;
@@ -16,6 +26,9 @@ use penumbra::bvh::{BuildQuality, BvhSettings};
 #[derive(Debug, Parser)]
 #[command(name = "penumbra", version, about)]
 pub struct Cli {
+    /// On an error, also print its source chain and full detail.
+    #[arg(long, short, global = true)]
+    pub verbose: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -89,4 +102,54 @@ pub fn write_json(path: &std::path::Path, report: &impl serde::Serialize) -> pen
         message: format!("could not encode the report: {e}"),
     })?;
     penumbra::output::write_bytes_atomically(path, &json)
+}
+
+/// The text `main` prints for an error: one line `error: ...` (a multi-line
+/// message joined with `; `); with `verbose`, followed by one `caused by: `
+/// line per source in the error's chain and a `detail: ` line with its debug form.
+pub fn error_report(err: &penumbra::Error, verbose: bool) -> String {
+    let mut out = format!("error: {}", one_line(&err.to_string()));
+    if verbose {
+        let mut source = std::error::Error::source(err);
+        while let Some(s) = source {
+            out.push_str(&format!("\ncaused by: {}", one_line(&s.to_string())));
+            source = s.source();
+        }
+        out.push_str(&format!("\ndetail: {err:?}"));
+    }
+    out
+}
+
+/// `text`'s non-empty lines, trimmed and joined with `; `.
+fn one_line(text: &str) -> String {
+    text.lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// A panic payload as text (`panic!` gives a `&str` or a `String`).
+pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    let text = if let Some(s) = payload.downcast_ref::<&str>() {
+        (*s).to_owned()
+    } else if let Some(s) = payload.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "a panic with a non-text payload".to_owned()
+    };
+    one_line(&text)
+}
+
+/// Parses `WIDTHxHEIGHT` (both at least 1).
+pub fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or("expected WIDTHxHEIGHT, e.g. 512x512")?;
+    let parse = |v: &str| v.trim().parse::<u32>().map_err(|e| format!("'{v}': {e}"));
+    let (w, h) = (parse(w)?, parse(h)?);
+    if w == 0 || h == 0 {
+        return Err("width and height must be at least 1".into());
+    }
+    Ok((w, h))
 }

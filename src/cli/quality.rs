@@ -15,7 +15,8 @@ use penumbra::{Error, Result};
 use serde::Serialize;
 
 use super::BvhArgs;
-use super::render::{VectorArg, parse_size};
+use super::parse_size;
+use super::render::VectorArg;
 use super::scene_arg::{builtin_names, load_scene_and_view};
 
 /// Arguments of `penumbra quality`.
@@ -111,7 +112,7 @@ pub fn run(args: &QualityArgs) -> Result<()> {
     settings.filter = Some((args.depth_tolerance, args.normal_tolerance));
     // (method, visibility per pixel, GPU ms)
     let mut methods: Vec<(String, Vec<f32>, f64)> = Vec::new();
-    eprint!("rendering MFT 16 spp…\r");
+    progress!("rendering MFT 16 spp…\r");
     let mft = renderer(Tracer::Mft)?;
     mft.render(&ctx, &gpu_scene, &view, &FrameSettings::new(8, 8))?; // compile before timing
     let frame = mft.render(&ctx, &gpu_scene, &view, &settings)?;
@@ -131,7 +132,7 @@ pub fn run(args: &QualityArgs) -> Result<()> {
     settings.filter = None;
     settings.keep_gbuffer = false;
     for rays in [64, 256] {
-        eprint!("rendering reference {rays} spp…   \r");
+        progress!("rendering reference {rays} spp…   \r");
         let r = renderer(Tracer::Reference { rays })?;
         r.render(&ctx, &gpu_scene, &view, &FrameSettings::new(8, 8))?;
         let f = r.render(&ctx, &gpu_scene, &view, &settings)?;
@@ -142,13 +143,13 @@ pub fn run(args: &QualityArgs) -> Result<()> {
         ));
     }
     let start = Instant::now();
-    let progress = |rows: usize| eprint!("\rexact     {rows}/{h} rows   ");
+    let progress = |rows: usize| progress!("\rexact     {rows}/{h} rows   ");
     let options = ExactImageOptions {
         budget: Some(Duration::from_secs_f64(args.time_budget.max(0.0))),
         on_row: Some(&progress),
     };
     let exact = exact_visibility_image_with(&bvh, &gbuffer, w, h, &view.light, &options);
-    eprint!("\r{:40}\r", "");
+    progress!("\r{:40}\r", "");
     let exact = exact?;
     let exact_seconds = start.elapsed().as_secs_f64();
 

@@ -3,7 +3,6 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use penumbra::Result;
 use penumbra::bvh::Bvh;
 use penumbra::filter::FilterParams;
 use penumbra::gpu::{
@@ -12,6 +11,8 @@ use penumbra::gpu::{
 };
 use penumbra::output::{FloatImage, HdrImage, ToneMap, write_float_image, write_image};
 use penumbra::reference::shadow::MASK_SKY;
+use penumbra::view_checks::view_warnings;
+use penumbra::{Error, Result};
 
 use super::BvhArgs;
 use super::scene_arg::{builtin_names, load_scene_and_view};
@@ -103,7 +104,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub view: Option<PathBuf>,
     /// Image size WIDTHxHEIGHT in pixels (any size; edge tiles are partial).
-    #[arg(long, default_value = "512x512", value_parser = parse_size)]
+    #[arg(long, default_value = "512x512", value_parser = super::parse_size)]
     pub size: (u32, u32),
     /// Shadow tracer: mft (multi-frusta), packet (16-ray packets), per-ray, reference
     /// (--spp rays per pixel to the same stratified points, unfiltered), or exact (CPU
@@ -176,18 +177,6 @@ fn parse_tracer(s: &str) -> std::result::Result<TracerArg, String> {
     }
 }
 
-pub fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or("expected WIDTHxHEIGHT, e.g. 512x512")?;
-    let parse = |v: &str| v.trim().parse::<u32>().map_err(|e| format!("'{v}': {e}"));
-    let (w, h) = (parse(w)?, parse(h)?);
-    if w == 0 || h == 0 {
-        return Err("width and height must be at least 1".into());
-    }
-    Ok((w, h))
-}
-
 /// `out.png` + `visibility` → `out.visibility.exr`.
 fn aov_path(output: &Path, name: &str) -> PathBuf {
     let stem = output
@@ -224,7 +213,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     if !matches!(ext.as_deref(), Some("png" | "exr")) {
-        return Err(penumbra::Error::Output {
+        return Err(Error::Output {
             path: args.output.clone(),
             message: "unsupported output format: use .png or .exr".into(),
         });
@@ -232,6 +221,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let (width, height) = args.size;
     let (scene, view) = load_scene_and_view(args.scene.as_deref(), args.view.as_deref())?;
     let bvh = Bvh::build(&scene, &args.bvh.settings())?;
+    let view_name = args
+        .view
+        .as_ref()
+        .map_or_else(|| "view".to_owned(), |p| p.display().to_string());
+    for w in view_warnings(&view, &scene, &bvh) {
+        eprintln!("warning: {view_name}: {w}");
+    }
     println!(
         "scene     {} — {} triangles, BVH {} nodes in {:.1} ms",
         scene.source.display(),
@@ -274,18 +270,18 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     // Lavapipe compiles a pipeline at its first dispatch: a tiny frame first
     // keeps compilation out of the timings below.
-    eprint!("compiling kernels…\r");
+    progress!("compiling kernels…\r");
     renderer.render(&ctx, &gpu_scene, &view, &FrameSettings::new(8, 8))?;
     let unit = tracer.unit();
     let rays_per_pixel = f64::from(tracer.rays_per_pixel());
     let start = Instant::now();
     let frame = renderer.render_with_progress(&ctx, &gpu_scene, &view, &settings, &mut |done, total| {
-        eprint!(
+        progress!(
             "\rshadow    {done}/{total} {}   ",
             if unit == 4 { "tiles of 4x4" } else { "pixels" }
         );
     })?;
-    eprint!("\r{:60}\r", "");
+    progress!("\r{:60}\r", "");
     let wall = start.elapsed().as_secs_f64();
 
     let hits = frame.masks.iter().filter(|&&m| m & MASK_SKY == 0).count() as f64;

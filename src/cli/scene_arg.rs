@@ -47,7 +47,17 @@ pub fn load_scene_and_view(scene_arg: Option<&Path>, view_arg: Option<&Path>) ->
     let view = match (view_arg, builtin_view(scene_arg)) {
         (Some(path), _) => View::load(path)?,
         (None, Some(view)) => view,
-        (None, None) => View::default_for(&scene.bounds(), scene.camera),
+        (None, None) => {
+            let view = View::default_for(&scene.bounds(), scene.camera);
+            // The scene's bounds can be too large for a light above them.
+            view.validate().map_err(|m| {
+                penumbra::Error::scene(
+                    &scene.source,
+                    format!("the default view for this scene is unusable ({m}); give one with --view"),
+                )
+            })?;
+            view
+        }
     };
     if let Some(y) = view.ground_y {
         scene.add_ground_plane(y);

@@ -14,6 +14,7 @@ mod buffers;
 mod context;
 pub mod embed;
 pub mod kernel;
+pub mod memory;
 mod motion;
 pub mod primary_pass;
 pub mod render;

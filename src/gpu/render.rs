@@ -287,6 +287,8 @@ impl Renderer {
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<Frame> {
         let (w, h) = (settings.width, settings.height);
+        // Tiles are sized to fit; this catches a forced `max_tile` that does not.
+        super::memory::check_frame_fits(super::memory::storage_limit(ctx), w, h)?;
         let pixels = u64::from(w) * u64::from(h);
         let rw = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
         let gbuffer = empty_storage_buffer(ctx, "G-buffer", pixels * size_of::<GBufferTexel>() as u64, rw)?;

@@ -70,7 +70,9 @@ fn f32_at(b: &[u8], i: usize) -> f32 {
     f32::from_le_bytes([b[4 * i], b[4 * i + 1], b[4 * i + 2], b[4 * i + 3]])
 }
 
-/// Reads a VEC3 float accessor (positions, normals); rejects non-finite values.
+/// Reads a VEC3 float accessor (positions, normals) as stored: non-finite
+/// values are the caller's to handle (the importer drops triangles with a
+/// non-finite corner and replaces non-finite normals by the face normal).
 pub(crate) fn read_vec3(acc: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<[f32; 3]>, String> {
     let what = format!("accessor {}", acc.index());
     if acc.dimensions() != Dimensions::Vec3 || acc.data_type() != DataType::F32 {
@@ -81,15 +83,10 @@ pub(crate) fn read_vec3(acc: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec
         ));
     }
     let slices = element_slices(acc, buffers)?;
-    let mut out = Vec::with_capacity(slices.len());
-    for (i, b) in slices.iter().enumerate() {
-        let v = [f32_at(b, 0), f32_at(b, 1), f32_at(b, 2)];
-        if !v.iter().all(|c| c.is_finite()) {
-            return Err(format!("{what} element {i} is not finite: {v:?}"));
-        }
-        out.push(v);
-    }
-    Ok(out)
+    Ok(slices
+        .iter()
+        .map(|b| [f32_at(b, 0), f32_at(b, 1), f32_at(b, 2)])
+        .collect())
 }
 
 /// Reads a VEC2 texture-coordinate accessor (float, or normalized u8/u16).

@@ -21,7 +21,7 @@ pub(crate) fn load_buffers(
                     .ok_or_else(|| format!("{what} refers to the GLB BIN chunk, but there is none"))?
                     .to_vec(),
                 gltf::buffer::Source::Uri(uri) => {
-                    load_uri(uri, base_dir).map_err(|e| format!("{what}: {e}"))?
+                    load_uri(uri, base_dir, buffer.length() as u64).map_err(|e| format!("{what}: {e}"))?
                 }
             };
             if data.len() < buffer.length() {
@@ -36,8 +36,10 @@ pub(crate) fn load_buffers(
         .collect()
 }
 
-/// Reads the bytes a URI names: a base64 `data:` URI or a path relative to `base_dir`.
-pub(crate) fn load_uri(uri: &str, base_dir: Option<&Path>) -> Result<Vec<u8>, String> {
+/// Reads the bytes a URI names: a base64 `data:` URI or a path relative to
+/// `base_dir`, of which at most `max_bytes` are read (a buffer needs no more
+/// than its `byteLength`).
+pub(crate) fn load_uri(uri: &str, base_dir: Option<&Path>, max_bytes: u64) -> Result<Vec<u8>, String> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let (_, payload) = rest
             .split_once(";base64,")
@@ -47,7 +49,23 @@ pub(crate) fn load_uri(uri: &str, base_dir: Option<&Path>) -> Result<Vec<u8>, St
             .map_err(|e| format!("data URI has invalid base64: {e}"));
     }
     let path = resolve_uri_path(uri, base_dir)?;
-    std::fs::read(&path).map_err(|e| format!("cannot read '{}': {e}", path.display()))
+    read_file_prefix(&path, max_bytes).map_err(|e| format!("cannot read '{}': {e}", path.display()))
+}
+
+/// The first `max_bytes` bytes of the regular file at `path` (all of it when shorter).
+///
+/// A hostile scene can name any path: devices and pipes (`/dev/zero`,
+/// `/dev/stdin`) are refused rather than read forever, and the limit keeps a
+/// huge file from being read in full.
+pub(crate) fn read_file_prefix(path: &Path, max_bytes: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let file = std::fs::File::open(path)?;
+    if !file.metadata()?.is_file() {
+        return Err(std::io::Error::other("not a regular file"));
+    }
+    let mut bytes = Vec::new();
+    file.take(max_bytes).read_to_end(&mut bytes)?;
+    Ok(bytes)
 }
 
 /// The file path a relative URI names.
@@ -96,10 +114,23 @@ mod tests {
     #[test]
     fn data_uri() {
         assert_eq!(
-            load_uri("data:application/octet-stream;base64,AAEC", None).unwrap(),
+            load_uri("data:application/octet-stream;base64,AAEC", None, 0).unwrap(),
             vec![0, 1, 2]
         );
-        assert!(load_uri("data:text/plain,hello", None).is_err());
-        assert!(load_uri("x.bin", None).is_err());
+        assert!(load_uri("data:text/plain,hello", None, 0).is_err());
+        assert!(load_uri("x.bin", None, 0).is_err());
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn devices_are_refused_and_files_read_up_to_the_limit() {
+        let err = read_file_prefix(Path::new("/dev/zero"), 16).unwrap_err();
+        assert_eq!(err.to_string(), "not a regular file");
+        let err = read_file_prefix(Path::new("/"), 16).unwrap_err();
+        assert_eq!(err.to_string(), "not a regular file");
+        let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("Cargo.toml");
+        let all = std::fs::read(&file).unwrap();
+        assert_eq!(read_file_prefix(&file, 10).unwrap(), all[..10]);
+        assert_eq!(read_file_prefix(&file, u64::MAX).unwrap(), all);
     }
 }

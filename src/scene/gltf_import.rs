@@ -46,7 +46,7 @@ pub(super) fn import(bytes: &[u8], path: &Path) -> Result<Scene, String> {
             }
         ));
     }
-    check_attribute_indices(&root)?;
+    check_what_gltf_assumes(&root)?;
     // gltf-json's validator indexes arrays before checking some indices; a
     // panic there is a malformed file, so it becomes an error like the rest.
     let doc = std::panic::catch_unwind(|| gltf::Document::from_json(root))
@@ -83,11 +83,10 @@ pub(super) fn import(bytes: &[u8], path: &Path) -> Result<Scene, String> {
                 gltf_scene.index()
             ));
         }
+        // A non-finite transform is not an error: the triangles it makes
+        // non-finite are dropped and counted like any other such triangle.
         let local = Mat4::from_cols_array_2d(&node.transform().matrix());
         let world = parent * local;
-        if !world.is_finite() {
-            return Err(format!("node {} has a non-finite transform", node.index()));
-        }
         if let Some(mesh) = node.mesh() {
             builder.add_mesh(&node, &mesh, world)?;
         }
@@ -95,7 +94,11 @@ pub(super) fn import(bytes: &[u8], path: &Path) -> Result<Scene, String> {
             && let Some(cam) = node.camera()
             && let gltf::camera::Projection::Perspective(p) = cam.projection()
         {
-            builder.camera = Some(node_camera(world, p.yfov()));
+            let camera = node_camera(world, p.yfov());
+            match camera.validate() {
+                Ok(()) => builder.camera = Some(camera),
+                Err(_) => builder.warnings.unusable_cameras += 1,
+            }
         }
         let mut children: Vec<_> = node.children().map(|c| (c, world)).collect();
         children.reverse();
@@ -105,13 +108,24 @@ pub(super) fn import(bytes: &[u8], path: &Path) -> Result<Scene, String> {
     if builder.triangles.is_empty() {
         let w = &builder.warnings;
         return Err(format!(
-            "scene {} has no triangles ({} point/line primitives and {} zero-area triangles skipped)",
+            "scene {} has no triangles ({} point/line primitives, {} zero-area and {} non-finite \
+             triangles skipped)",
             gltf_scene.index(),
             w.skipped_non_triangle_primitives,
-            w.degenerate_triangles
+            w.degenerate_triangles,
+            w.non_finite_triangles
         ));
     }
-    let camera = builder.camera.or_else(|| extras_camera(&doc));
+    let camera = match builder.camera {
+        Some(camera) => Some(camera),
+        None => match extras_camera(&doc) {
+            Some(camera) if camera.validate().is_err() => {
+                builder.warnings.unusable_cameras += 1;
+                None
+            }
+            other => other,
+        },
+    };
     let images = doc
         .images()
         .map(|img| image_source(&img, &buffers, base_dir))
@@ -132,8 +146,41 @@ pub(super) fn import(bytes: &[u8], path: &Path) -> Result<Scene, String> {
     })
 }
 
-/// Checks what gltf-json 1.4's validator would index unchecked: the accessors
-/// named by mesh primitive attributes.
+/// Checks what gltf 1.4 would index or unwrap unchecked: the accessors named
+/// by mesh primitive attributes (its validator indexes them), an image's
+/// `uri` or `bufferView` + `mimeType`, and a camera's projection of its
+/// `type` (both unwrapped when read; found by fuzzing).
+fn check_what_gltf_assumes(root: &gltf::json::Root) -> Result<(), String> {
+    for (i, image) in root.images.iter().enumerate() {
+        match (&image.buffer_view, &image.mime_type, &image.uri) {
+            (Some(_), None, _) => {
+                return Err(format!(
+                    "image {i} has a bufferView but no mimeType (glTF 2.0 requires one)"
+                ));
+            }
+            (None, _, None) => return Err(format!("image {i} has neither a uri nor a bufferView")),
+            _ => {}
+        }
+    }
+    for (i, camera) in root.cameras.iter().enumerate() {
+        use gltf::json::camera::Type;
+        use gltf::json::validation::Checked;
+        let consistent = match camera.type_ {
+            Checked::Valid(Type::Perspective) => camera.perspective.is_some(),
+            Checked::Valid(Type::Orthographic) => camera.orthographic.is_some(),
+            // The validator reports an invalid type.
+            Checked::Invalid => true,
+        };
+        if !consistent {
+            return Err(format!(
+                "camera {i}: its type names a projection the camera does not define"
+            ));
+        }
+    }
+    check_attribute_indices(root)
+}
+
+/// The accessors named by mesh primitive attributes exist.
 fn check_attribute_indices(root: &gltf::json::Root) -> Result<(), String> {
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, prim) in mesh.primitives.iter().enumerate() {
@@ -240,21 +287,25 @@ impl Builder<'_> {
                     tri.swap(1, 2);
                 }
                 let p = tri.map(|i| world.transform_point3(Vec3::from(positions[i as usize])));
-                if !p.iter().all(|v| v.is_finite()) {
-                    return Err(format!(
-                        "{what}: a position is not finite after the node transform"
-                    ));
-                }
                 let face = (p[1] - p[0]).cross(p[2] - p[0]);
-                if face.length_squared() == 0.0 || !face.is_finite() {
+                // Dropped, not refused: one bad triangle should not cost the
+                // whole scene, and the BVH must never see it.
+                if !p.iter().all(|v| v.is_finite()) || !face.is_finite() {
+                    self.warnings.non_finite_triangles += 1;
+                    continue;
+                }
+                // Scaled first so that tiny and huge (but finite) faces normalise too.
+                let largest = face.abs().max_element();
+                if largest == 0.0 {
                     self.warnings.degenerate_triangles += 1;
                     continue;
                 }
-                let face = face.normalize();
+                let face = (face / largest).normalize();
                 let n = match &normals {
                     Some(ns) => tri.map(|i| {
                         let n = normal_matrix * Vec3::from(ns[i as usize]);
-                        // A zero normal in the file falls back to the face normal.
+                        // A zero or non-finite normal (in the file, or from a singular
+                        // transform) falls back to the face normal.
                         n.try_normalize().unwrap_or(face)
                     }),
                     None => [face; 3],
@@ -336,7 +387,7 @@ fn image_source(
         }
         gltf::image::Source::Uri { uri, mime_type } if uri.starts_with("data:") => {
             Ok(ImageSource::Embedded {
-                bytes: load_uri(uri, base_dir).map_err(|e| format!("{what}: {e}"))?,
+                bytes: load_uri(uri, base_dir, u64::MAX).map_err(|e| format!("{what}: {e}"))?,
                 mime_type: mime_type.map(str::to_owned),
             })
         }

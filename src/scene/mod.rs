@@ -8,6 +8,8 @@ mod gltf_import;
 
 use std::path::{Path, PathBuf};
 
+pub(crate) use buffers::read_file_prefix;
+
 use glam::{Vec2, Vec3};
 
 use crate::{Error, Result};
@@ -101,6 +103,12 @@ pub struct LoadWarnings {
     pub skipped_non_triangle_primitives: usize,
     /// Triangles with zero area (repeated or collinear corners), dropped: no ray can hit them.
     pub degenerate_triangles: usize,
+    /// Triangles with a NaN or infinite corner (in the file or after the node
+    /// transforms), or whose area overflows f32, dropped: they cannot be traced.
+    pub non_finite_triangles: usize,
+    /// Cameras in the file that describe no usable view (for example a
+    /// non-finite node transform, or up parallel to the view direction), ignored.
+    pub unusable_cameras: usize,
     /// Triangle strips or fans converted to triangle lists.
     pub converted_strips_and_fans: usize,
 }
@@ -120,6 +128,15 @@ impl LoadWarnings {
                 "dropped {} zero-area triangle(s)",
                 self.degenerate_triangles
             ));
+        }
+        if self.non_finite_triangles > 0 {
+            out.push(format!(
+                "dropped {} triangle(s) with non-finite (NaN or infinite) positions",
+                self.non_finite_triangles
+            ));
+        }
+        if self.unusable_cameras > 0 {
+            out.push(format!("ignored {} unusable camera(s)", self.unusable_cameras));
         }
         if self.converted_strips_and_fans > 0 {
             out.push(format!(
