@@ -3,7 +3,7 @@
 //!
 //! The pipeline: [`scene::Scene::load`] reads a glTF file into world-space
 //! triangles, [`bvh::Bvh::build`] builds a BVH of 32-byte nodes with triangles
-//! in leaf order, and [`reference`] traces rays over exactly the data the GPU
+//! in leaf order, and [`reference`](mod@reference) traces rays over exactly the data the GPU
 //! reads (it is the oracle for every GPU kernel).
 //!
 //! On the GPU, [`gpu::Renderer`] renders whole frames; an application with its own wgpu
