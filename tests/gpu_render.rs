@@ -4,15 +4,14 @@
 
 mod support;
 
+use penumbra::assets;
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::gpu::{
     FrameSettings, GpuScene, LeafMode, Renderer, RendererOptions, ShadowTracer, TracerOptions,
-    empty_storage_buffer, read_buffer, storage_buffer,
 };
 use penumbra::reference::shadow::{ITERATION_BUDGET, shadow_params};
-use penumbra::{assets, sampling};
 use support::assert_masks_match_oracle;
-use support::gpu::{ctx, embedded, variants};
+use support::gpu::{ctx, embedded, trace_masks, variants};
 
 #[test]
 fn shadow_masks_match_the_per_ray_oracle_for_every_variant() {
@@ -110,15 +109,6 @@ fn transposed_leaves_resume_after_suspension_with_the_same_masks() {
         .render(ctx(), &gpu_scene, &view, &settings)
         .unwrap();
     let texels = frame.gbuffer.as_ref().unwrap();
-    let points: Vec<[f32; 4]> = sampling::light_points(&view.light)
-        .iter()
-        .map(|p| p.extend(0.0).to_array())
-        .collect();
-    let usage = wgpu::BufferUsages::empty();
-    let gbuffer = storage_buffer(ctx(), "G-buffer", texels, usage).unwrap();
-    let light_points = storage_buffer(ctx(), "light points", &points, usage).unwrap();
-    let bytes = u64::from(w * h) * 4;
-    let masks = empty_storage_buffer(ctx(), "masks", bytes, wgpu::BufferUsages::COPY_SRC).unwrap();
     for variant in variants() {
         for (leaf_mode, shrink) in [
             (LeafMode::PerLane, false),
@@ -137,19 +127,7 @@ fn transposed_leaves_resume_after_suspension_with_the_same_masks() {
             for budget in [ITERATION_BUDGET, 97] {
                 let mut params = shadow_params(&view.light, w, h);
                 params.iteration_budget = budget;
-                let stats = pass
-                    .run(
-                        ctx(),
-                        &gpu_scene,
-                        &gbuffer,
-                        &light_points,
-                        &masks,
-                        &params,
-                        None,
-                        &mut |_, _| {},
-                    )
-                    .unwrap();
-                let got: Vec<u32> = read_buffer(ctx(), &masks, 0..bytes).unwrap();
+                let (got, stats) = trace_masks(&pass, &gpu_scene, texels, &view, &params);
                 eprintln!("{variant} {leaf_mode} shrink {shrink} budget {budget}: {stats:?}");
                 if budget < ITERATION_BUDGET {
                     assert!(stats.suspensions > 0, "{variant} {leaf_mode}: nothing suspended");

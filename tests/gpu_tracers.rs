@@ -8,7 +8,7 @@ use glam::Vec3;
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::gpu::{
     FrameSettings, GpuScene, LeafMode, Renderer, RendererOptions, ShadowTracer, Tracer, TracerOptions,
-    VectorVariant, empty_storage_buffer, read_buffer, storage_buffer,
+    VectorVariant,
 };
 use penumbra::layout::GBufferTexel;
 use penumbra::reference::counters::Counters;
@@ -17,7 +17,7 @@ use penumbra::reference::packet::packet_masks;
 use penumbra::reference::shadow::{ITERATION_BUDGET, MASK_FULL, reference_counts, shadow_params};
 use penumbra::view::{QuadLight, View};
 use penumbra::{assets, sampling};
-use support::gpu::{ctx, embedded, variants};
+use support::gpu::{ctx, embedded, trace_masks, variants};
 use support::{assert_masks_match_oracle, scene_from_triangles};
 
 fn options(tracer: Tracer, variant: VectorVariant) -> RendererOptions {
@@ -142,29 +142,8 @@ fn run_counted(
         },
     )
     .unwrap();
-    let points: Vec<[f32; 4]> = sampling::light_points(&view.light)
-        .iter()
-        .map(|p| p.extend(0.0).to_array())
-        .collect();
-    let usage = wgpu::BufferUsages::empty();
-    let gbuffer = storage_buffer(ctx(), "G-buffer", texels, usage).unwrap();
-    let light_points = storage_buffer(ctx(), "light points", &points, usage).unwrap();
-    let bytes = u64::from(w * h) * 4;
-    let masks = empty_storage_buffer(ctx(), "masks", bytes, wgpu::BufferUsages::COPY_SRC).unwrap();
-    let params = shadow_params(&view.light, w, h);
-    let stats = pass
-        .run(
-            ctx(),
-            gpu_scene,
-            &gbuffer,
-            &light_points,
-            &masks,
-            &params,
-            None,
-            &mut |_, _| {},
-        )
-        .unwrap();
-    (read_buffer(ctx(), &masks, 0..bytes).unwrap(), stats.counters)
+    let (masks, stats) = trace_masks(&pass, gpu_scene, texels, view, &shadow_params(&view.light, w, h));
+    (masks, stats.counters)
 }
 
 #[test]
