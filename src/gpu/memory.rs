@@ -19,10 +19,10 @@ use crate::layout::{BvhNode, BvhTriangle, GBufferTexel, GpuMaterial, GpuTexture,
 use crate::scene::Scene;
 use crate::{Error, Result};
 
-/// 32-bit words of one tile's suspended shadow-pass state (`STATE_WORDS` in `shadow_pass.rs`).
-pub const SHADOW_STATE_WORDS: u64 = 160;
-/// Tiles per shadow-pass dispatch along each axis (`CHUNK_TILES` in `shadow_pass.rs`).
-pub const SHADOW_CHUNK_TILES: u64 = 128;
+/// 32-bit words of one tile's suspended shadow-pass state.
+pub const SHADOW_STATE_WORDS: u64 = super::shadow_tracer::STATE_WORDS;
+/// Tiles per shadow-pass dispatch along each axis.
+pub const SHADOW_CHUNK_TILES: u64 = super::shadow_tracer::CHUNK_TILES as u64;
 
 /// One GPU buffer: its label (as given to wgpu) and its size in bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -212,9 +212,9 @@ mod tests {
         let get = |label: &str| buffers.iter().find(|b| b.label == label).unwrap().bytes;
         assert_eq!(mib(get("G-buffer")), 64.0);
         assert_eq!(mib(get("shadow masks")), 4.0);
-        assert_eq!(get("shadow state"), 128 * 128 * 160 * 4);
-        // 64 + 4 + 16 + 4 + 16 + 16 + 16 per pixel, 16 staging, 10 MiB of state.
-        assert_eq!(mib(total_bytes(&buffers)), 136.0 + 16.0 + 10.0);
+        assert_eq!(get("shadow state"), 128 * 128 * SHADOW_STATE_WORDS * 4);
+        // 64 + 4 + 16 + 4 + 16 + 16 + 16 per pixel, 16 staging, 11 MiB of state (176 words).
+        assert_eq!(mib(total_bytes(&buffers)), 136.0 + 16.0 + 11.0);
         assert_eq!(largest(&buffers).unwrap().label, "G-buffer");
     }
 
@@ -223,7 +223,7 @@ mod tests {
         let buffers = frame_buffers(1, 7);
         assert!(buffers.iter().all(|b| b.bytes >= 16 && b.bytes % 4 == 0));
         let state = buffers.iter().find(|b| b.label == "shadow state").unwrap();
-        assert_eq!(state.bytes, 2 * 160 * 4, "1x7 pixels = 1x2 tiles");
+        assert_eq!(state.bytes, 2 * SHADOW_STATE_WORDS * 4, "1x7 pixels = 1x2 tiles");
     }
 
     #[test]

@@ -16,10 +16,10 @@ use crate::{Error, Result};
 
 /// 32-bit words of one tile's suspended state (see the kernels; the packet
 /// kernel uses the first 160).
-const STATE_WORDS: u64 = 176;
+pub(crate) const STATE_WORDS: u64 = 176;
 /// Tiles per dispatch along each axis: 128×128 tiles = 512×512 pixels, so
 /// the state buffer stays at 10 MiB and no dispatch runs for long.
-const CHUNK_TILES: u32 = 128;
+pub(crate) const CHUNK_TILES: u32 = 128;
 /// Resume rounds after which the pass gives up (a bug, not a scene, could cause it).
 const MAX_ROUNDS: u32 = 10_000;
 
