@@ -1,12 +1,16 @@
 // 4×4 discontinuity filter: each pixel averages the values of the 4×4 window around it, using only neighbours at a similar depth and normal.
 // Dispatched by the filter pass after shading, ceil(width/8) × ceil(height/8) workgroups; its CPU twin is `penumbra::filter::filter_pixel`.
 
-// Mirrors `FilterParams` in `src/filter.rs`, 16 bytes; a naga test checks size and offsets.
+// Mirrors `FilterParams` in `src/filter.rs`, 32 bytes; a naga test checks size and offsets.
 struct FilterParams {
     width: u32,             // bytes 0..4: image width in pixels
     height: u32,            // bytes 4..8: image height in pixels
     depth_tolerance: f32,   // bytes 8..12: a neighbour is accepted when |d_n - d_c| <= depth_tolerance * d_c
     normal_tolerance: f32,  // bytes 12..16: ... and dot(n_n, n_c) >= normal_tolerance
+    visibility_tolerance: f32,  // bytes 16..20: ... and |v_n - v_c| <= visibility_tolerance (v = values.w)
+    pad0: u32,              // bytes 20..32: unused (a uniform's size is a multiple of 16)
+    pad1: u32,
+    pad2: u32,
 }
 
 const WG_SIZE: u32 = 8u;
@@ -51,7 +55,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             // Written out rather than dot() to fix the order of the products' sum.
             let cos_nc = n_n.x * n_c.x + n_n.y * n_c.y + n_n.z * n_c.z;
             let similar = d_n > 0.0 && abs(d_n - d_c) <= params.depth_tolerance * d_c
-                && cos_nc >= params.normal_tolerance;
+                && cos_nc >= params.normal_tolerance
+                && abs(values[ix].w - values[c_ix].w) <= params.visibility_tolerance;
             // The centre always counts, whatever the tolerances, so n_accepted >= 1.
             if (dx == 0 && dy == 0) || similar {
                 sum += values[ix];

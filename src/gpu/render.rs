@@ -353,12 +353,7 @@ impl Renderer {
             self.shade.record(&mut encoder, "shade", &bind, writes, groups);
         }
         if let Some((depth_tolerance, normal_tolerance)) = settings.filter {
-            let params = FilterParams {
-                width: w,
-                height: h,
-                depth_tolerance,
-                normal_tolerance,
-            };
+            let params = FilterParams::with_tolerances(w, h, depth_tolerance, normal_tolerance);
             let params_buf = uniform_buffer(ctx, "filter params", &params);
             let bind = self
                 .filter

@@ -329,12 +329,7 @@ impl ShadowPass {
         let filtered_values = match self.settings.filter {
             None => &targets.values,
             Some((depth_tolerance, normal_tolerance)) => {
-                let params = FilterParams {
-                    width: w,
-                    height: h,
-                    depth_tolerance,
-                    normal_tolerance,
-                };
+                let params = FilterParams::with_tolerances(w, h, depth_tolerance, normal_tolerance);
                 let params_buf = uniform_buffer_on(device, "filter params", &params);
                 let bind = self.filter.bind_on(
                     device,
