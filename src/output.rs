@@ -355,7 +355,7 @@ fn check_size(path: &Path, width: u32, height: u32, len: usize) -> Result<()> {
     Ok(())
 }
 
-/// Writes `bytes` to `path` whole or not at all (see [`replace_file`]): for reports
+/// Writes `bytes` to `path` whole or not at all (a temporary file beside it, renamed into place; see the [module docs](self)): for reports
 /// and other small files.
 pub fn write_bytes_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     replace_file(path, |f| f.write_all(bytes))
