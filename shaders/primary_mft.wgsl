@@ -3,6 +3,7 @@
 
 #import shared/bvh
 #import shared/counters
+#import shared/descend
 #import shared/frame
 #import shared/intersect
 #import shared/primary
@@ -290,25 +291,19 @@ fn main(ids: Vec16Ids) {
             let mine = (mask & (1u << g_lane)) != 0u;
             let ml = ballot16(mine && frustum_may_hit_box(left, dl));
             let mr = ballot16(mine && frustum_may_hit_box(right, dr));
-            if ml != 0u && mr != 0u {
-                // Nearer child first; the other waits on the stack with its frusta.
-                let right_first = order_key(right, order_dir) < order_key(left, order_dir);
-                node = select(l, l + 1u, right_first);
-                mask = select(ml, mr, right_first);
+            // Nearer child first; the other waits on the stack with its frusta.
+            let d = descend(l, ml, mr, order_key(right, order_dir) < order_key(left, order_dir));
+            if d.later_mask != 0u {
                 // The host checked that the BVH is shallower than the stack.
                 let top = min(depth, STACK_SIZE - 1u);
-                stack_node[top] = select(l + 1u, l, right_first);
-                stack_mask[top] = select(mr, ml, right_first);
-                stack_depth[top] = select(dr, dl, right_first);
+                stack_node[top] = d.later;
+                stack_mask[top] = d.later_mask;
+                stack_depth[top] = select(dr, dl, d.later == l);
                 depth += 1u;
-                enter = true;
-            } else if ml != 0u {
-                node = l;
-                mask = ml;
-                enter = true;
-            } else if mr != 0u {
-                node = l + 1u;
-                mask = mr;
+            }
+            if d.mask != 0u {
+                node = d.node;
+                mask = d.mask;
                 enter = true;
             } else {
                 popping = true;

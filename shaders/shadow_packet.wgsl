@@ -2,6 +2,7 @@
 // Dispatched by the shadow tracer (src/gpu/shadow_tracer.rs, Tracer::Packet); CPU twin: src/reference/packet.rs.
 
 #import shared/bvh
+#import shared/descend
 #import shared/frame
 #import shared/intersect
 #import shared/vec16
@@ -147,22 +148,17 @@ fn main(ids: Vec16Ids) {
             let mine = (mask & alive & (1u << g_lane)) != 0u;
             let ml = ballot16(mine && intersect_box(origin, inv_dir, nodes[l], params.t_max) >= 0.0);
             let mr = ballot16(mine && intersect_box(origin, inv_dir, nodes[l + 1u], params.t_max) >= 0.0);
-            if ml != 0u && mr != 0u {
-                let right_first = countOneBits(mr) > countOneBits(ml);
-                node = select(l, l + 1u, right_first);
-                mask = select(ml, mr, right_first);
+            // Into the child more rays want first.
+            let d = descend(l, ml, mr, countOneBits(mr) > countOneBits(ml));
+            if d.later_mask != 0u {
                 // The host checked that the BVH is shallower than the stack.
-                stack_node[min(depth, STACK_SIZE - 1u)] = select(l + 1u, l, right_first);
-                stack_mask[min(depth, STACK_SIZE - 1u)] = select(mr, ml, right_first);
+                stack_node[min(depth, STACK_SIZE - 1u)] = d.later;
+                stack_mask[min(depth, STACK_SIZE - 1u)] = d.later_mask;
                 depth += 1u;
-                enter = true;
-            } else if ml != 0u {
-                node = l;
-                mask = ml;
-                enter = true;
-            } else if mr != 0u {
-                node = l + 1u;
-                mask = mr;
+            }
+            if d.mask != 0u {
+                node = d.node;
+                mask = d.mask;
                 enter = true;
             } else {
                 popping = 1u;

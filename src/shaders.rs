@@ -43,6 +43,7 @@ pub static SOURCES: &[(&str, &str)] = &[
     ("shadow_per_ray", include_str!("../shaders/shadow_per_ray.wgsl")),
     ("shared/bvh", include_str!("../shaders/shared/bvh.wgsl")),
     ("shared/counters", include_str!("../shaders/shared/counters.wgsl")),
+    ("shared/descend", include_str!("../shaders/shared/descend.wgsl")),
     ("shared/frame", include_str!("../shaders/shared/frame.wgsl")),
     (
         "shared/intersect",

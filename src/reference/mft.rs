@@ -13,6 +13,7 @@
 
 use glam::Vec3;
 
+use super::descend::descend;
 use super::shadow::{MASK_FULL, MASK_SKY, initial_mask, light_corners};
 use crate::bvh::Bvh;
 use crate::layout::{BvhNode, BvhTriangle, GBufferTexel, ShadowParams};
@@ -352,21 +353,15 @@ pub fn trace_tile_with(
                 })
             };
             let (ml, mr) = (wants(l), wants(l + 1));
-            match (ml != 0, mr != 0) {
-                (true, true) => {
-                    // Descend into the child more frusta want; keep the other for later.
-                    let (first, fm, second, sm) = if mr.count_ones() > ml.count_ones() {
-                        (l + 1, mr, l, ml)
-                    } else {
-                        (l, ml, l + 1, mr)
-                    };
-                    assert!(st.stack.len() < STACK_SIZE, "BVH deeper than the traversal stack");
-                    st.stack.push((second, sm));
-                    st.enter(bvh, first, fm);
-                }
-                (true, false) => st.enter(bvh, l, ml),
-                (false, true) => st.enter(bvh, l + 1, mr),
-                (false, false) => st.popping = true,
+            // Into the child more frusta want first.
+            let d = descend(l, ml, mr, mr.count_ones() > ml.count_ones());
+            if let Some(later) = d.later {
+                assert!(st.stack.len() < STACK_SIZE, "BVH deeper than the traversal stack");
+                st.stack.push(later);
+            }
+            match d.now {
+                Some((c, m)) => st.enter(bvh, c, m),
+                None => st.popping = true,
             }
         }
     }

@@ -6,6 +6,7 @@
 //! pass's G-buffer kernels. They are the oracles for the GPU kernels.
 
 pub mod counters;
+mod descend;
 pub mod exact;
 mod intersect;
 pub mod mft;

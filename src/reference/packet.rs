@@ -10,6 +10,7 @@
 use glam::Vec3;
 
 use super::counters::Counters;
+use super::descend::descend;
 use super::mft::STACK_SIZE;
 use super::shadow::{MASK_SKY, initial_mask};
 use super::{RayBox, intersect_box, intersect_triangle, safe_inverse};
@@ -106,27 +107,16 @@ pub fn trace_packet(
             let active = mask & alive;
             let ml = ballot(&|j| active & (1 << j) != 0 && hits_box(j, l));
             let mr = ballot(&|j| active & (1 << j) != 0 && hits_box(j, l + 1));
-            let (first, fm) = match (ml != 0, mr != 0) {
-                (true, true) => {
-                    // Descend into the child more rays want; keep the other for later.
-                    let right_first = mr.count_ones() > ml.count_ones();
-                    let (first, fm, second, sm) = if right_first {
-                        (l + 1, mr, l, ml)
-                    } else {
-                        (l, ml, l + 1, mr)
-                    };
-                    assert!(stack.len() < STACK_SIZE, "BVH deeper than the traversal stack");
-                    stack.push((second, sm));
-                    (Some(first), fm)
-                }
-                (true, false) => (Some(l), ml),
-                (false, true) => (Some(l + 1), mr),
-                (false, false) => (None, 0),
-            };
-            match first {
-                Some(c) => {
+            // Into the child more rays want first.
+            let d = descend(l, ml, mr, mr.count_ones() > ml.count_ones());
+            if let Some(later) = d.later {
+                assert!(stack.len() < STACK_SIZE, "BVH deeper than the traversal stack");
+                stack.push(later);
+            }
+            match d.now {
+                Some((c, m)) => {
                     node = c;
-                    mask = fm;
+                    mask = m;
                     enter(c, &mut cursor, &mut end);
                 }
                 None => popping = true,

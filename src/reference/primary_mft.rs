@@ -14,6 +14,7 @@
 
 use glam::Vec3;
 
+use super::descend::descend;
 use super::primary::hit_texel;
 use super::{Hit, intersect_triangle};
 use crate::bvh::Bvh;
@@ -282,22 +283,16 @@ pub fn trace_block(
             let mr = ballot(&frusta, |i, f| {
                 mask & (1 << i) != 0 && f.may_hit_box(cam, right, dr)
             });
-            match (ml != 0, mr != 0) {
-                (true, true) => {
-                    // Nearer child first; the other waits on the stack with its frusta.
-                    let right_first = order_key(cam, right, order_dir) < order_key(cam, left, order_dir);
-                    let (first, second) = if right_first {
-                        ((l + 1, mr), (l, ml, dl))
-                    } else {
-                        ((l, ml), (l + 1, mr, dr))
-                    };
-                    assert!(stack.len() < STACK_SIZE, "BVH deeper than the traversal stack");
-                    stack.push(second);
-                    (node, mask, enter) = (first.0, first.1, true);
-                }
-                (true, false) => (node, mask, enter) = (l, ml, true),
-                (false, true) => (node, mask, enter) = (l + 1, mr, true),
-                (false, false) => popping = true,
+            // Nearer child first; the other waits on the stack with its frusta.
+            let right_first = order_key(cam, right, order_dir) < order_key(cam, left, order_dir);
+            let d = descend(l, ml, mr, right_first);
+            if let Some((c, m)) = d.later {
+                assert!(stack.len() < STACK_SIZE, "BVH deeper than the traversal stack");
+                stack.push((c, m, if c == l { dl } else { dr }));
+            }
+            match d.now {
+                Some((c, m)) => (node, mask, enter) = (c, m, true),
+                None => popping = true,
             }
         }
         if enter {
