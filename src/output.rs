@@ -134,23 +134,19 @@ fn srgb_encode(t: f32) -> f32 {
 /// count that is not `width · height`; [`Error::Io`] when the file cannot be
 /// written. Both name `path`.
 pub fn write_image(path: &Path, image: &HdrImage, tone: &ToneMap) -> Result<()> {
-    let format = format_of(path)?;
-    check_size(path, image.width, image.height, image.pixels.len())?;
-    let mut bytes = Vec::new();
-    let encoded = match format {
-        ImageFormat::Png => {
-            let srgb: Vec<u8> = image.pixels.iter().flat_map(|&p| tone.apply_rgb(p)).collect();
-            PngEncoder::new(&mut bytes).write_image(&srgb, image.width, image.height, ExtendedColorType::Rgb8)
-        }
-        _ => OpenExrEncoder::new(Cursor::new(&mut bytes)).write_image(
-            bytemuck::cast_slice(&image.pixels),
-            image.width,
-            image.height,
-            ExtendedColorType::Rgb32F,
-        ),
-    };
-    encoded.map_err(|e| output_error(path, format!("cannot encode the image: {e}")))?;
-    replace_file(path, |file| file.write_all(&bytes))
+    encode_to_file(
+        path,
+        image.width,
+        image.height,
+        image.pixels.len(),
+        |format, bytes| match format {
+            ImageFormat::Png => {
+                let srgb: Vec<u8> = image.pixels.iter().flat_map(|&p| tone.apply_rgb(p)).collect();
+                PngEncoder::new(bytes).write_image(&srgb, image.width, image.height, ExtendedColorType::Rgb8)
+            }
+            _ => encode_exr(bytes, &image.pixels, image.width, image.height),
+        },
+    )
 }
 
 /// Writes the one-channel `image` to `path`: `.exr` as a 32-bit float RGB
@@ -165,36 +161,32 @@ pub fn write_image(path: &Path, image: &HdrImage, tone: &ToneMap) -> Result<()> 
 ///
 /// As for [`write_image`].
 pub fn write_float_image(path: &Path, image: &FloatImage) -> Result<()> {
-    let format = format_of(path)?;
-    check_size(path, image.width, image.height, image.pixels.len())?;
-    let mut bytes = Vec::new();
-    let encoded = match format {
-        ImageFormat::Png => {
-            // Native-endian u16 samples: the PNG encoder swaps them to big endian itself.
-            let samples: Vec<u16> = image
-                .pixels
-                .iter()
-                .map(|&v| (v.clamp(0.0, 1.0) * 65535.0).round() as u16)
-                .collect();
-            PngEncoder::new(&mut bytes).write_image(
-                bytemuck::cast_slice(&samples),
-                image.width,
-                image.height,
-                ExtendedColorType::L16,
-            )
-        }
-        _ => {
-            let rgb: Vec<[f32; 3]> = image.pixels.iter().map(|&v| [v; 3]).collect();
-            OpenExrEncoder::new(Cursor::new(&mut bytes)).write_image(
-                bytemuck::cast_slice(&rgb),
-                image.width,
-                image.height,
-                ExtendedColorType::Rgb32F,
-            )
-        }
-    };
-    encoded.map_err(|e| output_error(path, format!("cannot encode the image: {e}")))?;
-    replace_file(path, |file| file.write_all(&bytes))
+    encode_to_file(
+        path,
+        image.width,
+        image.height,
+        image.pixels.len(),
+        |format, bytes| match format {
+            ImageFormat::Png => {
+                // Native-endian u16 samples: the PNG encoder swaps them to big endian itself.
+                let samples: Vec<u16> = image
+                    .pixels
+                    .iter()
+                    .map(|&v| (v.clamp(0.0, 1.0) * 65535.0).round() as u16)
+                    .collect();
+                PngEncoder::new(bytes).write_image(
+                    bytemuck::cast_slice(&samples),
+                    image.width,
+                    image.height,
+                    ExtendedColorType::L16,
+                )
+            }
+            _ => {
+                let rgb: Vec<[f32; 3]> = image.pixels.iter().map(|&v| [v; 3]).collect();
+                encode_exr(bytes, &rgb, image.width, image.height)
+            }
+        },
+    )
 }
 
 /// Writes display values (already mapped to `[0, 1]`, for example a false-colour
@@ -208,28 +200,50 @@ pub fn write_float_image(path: &Path, image: &FloatImage) -> Result<()> {
 ///
 /// As for [`write_image`].
 pub fn write_display_image(path: &Path, image: &HdrImage) -> Result<()> {
+    encode_to_file(
+        path,
+        image.width,
+        image.height,
+        image.pixels.len(),
+        |format, bytes| match format {
+            ImageFormat::Png => {
+                // `as u8` saturates and maps NaN to 0.
+                let rgb: Vec<u8> = image
+                    .pixels
+                    .iter()
+                    .flat_map(|p| p.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8))
+                    .collect();
+                PngEncoder::new(bytes).write_image(&rgb, image.width, image.height, ExtendedColorType::Rgb8)
+            }
+            _ => encode_exr(bytes, &image.pixels, image.width, image.height),
+        },
+    )
+}
+
+/// The writers' common part: checks the extension and the pixel count, lets
+/// `encode` fill a buffer for the file's format, and replaces `path` with it whole.
+fn encode_to_file(
+    path: &Path,
+    width: u32,
+    height: u32,
+    len: usize,
+    encode: impl FnOnce(ImageFormat, &mut Vec<u8>) -> image::ImageResult<()>,
+) -> Result<()> {
     let format = format_of(path)?;
-    check_size(path, image.width, image.height, image.pixels.len())?;
+    check_size(path, width, height, len)?;
     let mut bytes = Vec::new();
-    let encoded = match format {
-        ImageFormat::Png => {
-            // `as u8` saturates and maps NaN to 0.
-            let rgb: Vec<u8> = image
-                .pixels
-                .iter()
-                .flat_map(|p| p.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8))
-                .collect();
-            PngEncoder::new(&mut bytes).write_image(&rgb, image.width, image.height, ExtendedColorType::Rgb8)
-        }
-        _ => OpenExrEncoder::new(Cursor::new(&mut bytes)).write_image(
-            bytemuck::cast_slice(&image.pixels),
-            image.width,
-            image.height,
-            ExtendedColorType::Rgb32F,
-        ),
-    };
-    encoded.map_err(|e| output_error(path, format!("cannot encode the image: {e}")))?;
+    encode(format, &mut bytes).map_err(|e| output_error(path, format!("cannot encode the image: {e}")))?;
     replace_file(path, |file| file.write_all(&bytes))
+}
+
+/// 32-bit float linear RGB EXR of `pixels`.
+fn encode_exr(bytes: &mut Vec<u8>, pixels: &[[f32; 3]], width: u32, height: u32) -> image::ImageResult<()> {
+    OpenExrEncoder::new(Cursor::new(bytes)).write_image(
+        bytemuck::cast_slice(pixels),
+        width,
+        height,
+        ExtendedColorType::Rgb32F,
+    )
 }
 
 /// Reads an RGBA image from `path` (`.exr` or `.png`, by extension): alpha
