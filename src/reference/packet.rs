@@ -135,16 +135,9 @@ pub fn packet_masks(
     params: &ShadowParams,
     budget: u32,
 ) -> (Vec<u32>, Counters) {
-    let (w, h) = (params.width as usize, params.height as usize);
-    assert_eq!(
-        gbuffer.len(),
-        w * h,
-        "G-buffer size does not match the parameters"
-    );
-    let per_pixel = super::parallel::per_pixel(w, h, |p| {
-        let set = pixel_set((p % w) as u32, (p / w) as u32);
+    let per_pixel = super::parallel::per_texel(gbuffer, params, |x, y, texel| {
         let mut c = Counters::default();
-        let m = trace_packet(bvh, &gbuffer[p], set, light_points, params, budget, &mut c);
+        let m = trace_packet(bvh, texel, pixel_set(x, y), light_points, params, budget, &mut c);
         (m, c)
     });
     let mut counters = Counters::default();

@@ -22,3 +22,23 @@ pub fn per_pixel<T: Send + Clone + Default>(
     });
     out
 }
+
+/// `f(x, y, texel)` for every texel of a row-major G-buffer of the image `params`
+/// describes, spread as [`per_pixel`]; the shadow oracles' common loop.
+///
+/// # Panics
+///
+/// When `gbuffer` does not hold `width · height` texels (a caller bug).
+pub fn per_texel<T: Send + Clone + Default>(
+    gbuffer: &[crate::layout::GBufferTexel],
+    params: &crate::layout::ShadowParams,
+    f: impl Fn(u32, u32, &crate::layout::GBufferTexel) -> T + Sync,
+) -> Vec<T> {
+    let (w, h) = (params.width as usize, params.height as usize);
+    assert_eq!(
+        gbuffer.len(),
+        w * h,
+        "G-buffer size does not match the parameters"
+    );
+    per_pixel(w, h, |p| f((p % w) as u32, (p / w) as u32, &gbuffer[p]))
+}

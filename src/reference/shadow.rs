@@ -122,15 +122,8 @@ pub fn per_ray_masks(
     light_points: &[Vec3],
     params: &ShadowParams,
 ) -> Vec<u32> {
-    let (w, h) = (params.width as usize, params.height as usize);
-    assert_eq!(
-        gbuffer.len(),
-        w * h,
-        "G-buffer size does not match the parameters"
-    );
-    super::parallel::per_pixel(w, h, |p| {
-        let set = pixel_set((p % w) as u32, (p / w) as u32);
-        per_ray_mask(bvh, &gbuffer[p], set, light_points, params)
+    super::parallel::per_texel(gbuffer, params, |x, y, texel| {
+        per_ray_mask(bvh, texel, pixel_set(x, y), light_points, params)
     })
 }
 
@@ -153,14 +146,7 @@ pub fn reference_counts(
     points: &[Vec3],
     params: &ShadowParams,
 ) -> Vec<u32> {
-    let (w, h) = (params.width as usize, params.height as usize);
-    assert_eq!(
-        gbuffer.len(),
-        w * h,
-        "G-buffer size does not match the parameters"
-    );
-    super::parallel::per_pixel(w, h, |p| {
-        let texel = &gbuffer[p];
+    super::parallel::per_texel(gbuffer, params, |_, _, texel| {
         if !texel.is_hit() {
             return MASK_SKY;
         }
