@@ -53,10 +53,12 @@ const SHRINK_FLAG: u32 = 0x80000000u;
 var<private> f_origin: vec3<f32>;
 var<private> f_geo: vec3<f32>;
 var<private> f_side: array<vec3<f32>, 4>;
-var<private> f_dirs: array<vec3<f32>, 16>;
 var<private> f_occluded: u32;
-// The light rectangle this frustum bounds (shrunk or the whole light).
+// The light rectangle this frustum bounds (shrunk or the whole light): its
+// corners, and its (s, t) ranges on the light.
 var<private> f_corner: array<vec3<f32>, 4>;
+var<private> f_lo: vec2<f32>;
+var<private> f_hi: vec2<f32>;
 // SHRINK_FLAG | the mask the corners were shrunk for; 0: not shrunk.
 var<private> f_shrunk_for: u32;
 var<private> f_initial: u32;
@@ -87,11 +89,12 @@ fn setup_frustum(texel: GBufferTexel, sample_set: u32, inside: bool) {
     f_corner[2] = corner(2u);
     f_corner[3] = corner(3u);
     f_shrunk_for = 0u;
+    f_lo = vec2<f32>(0.0);
+    f_hi = vec2<f32>(1.0);
     set_sides();
     var below = 0u;
     for (var j = 0u; j < 16u; j++) {
         let d = light_points[sample_set * 16u + j].xyz - o;
-        f_dirs[j] = d;
         below |= select(0u, 1u << j, dot(f_geo, d) <= 0.0);
     }
     if !inside || texel.depth <= 0.0 {
@@ -102,6 +105,14 @@ fn setup_frustum(texel: GBufferTexel, sample_set: u32, inside: bool) {
         f_occluded = below;
     }
     f_initial = f_occluded;
+    let lf = light_frame();
+    // Unrolled on purpose: every loop iteration counts towards lavapipe's limit.
+    f_st[0] = sample_st(0u, lf); f_st[1] = sample_st(1u, lf); f_st[2] = sample_st(2u, lf);
+    f_st[3] = sample_st(3u, lf); f_st[4] = sample_st(4u, lf); f_st[5] = sample_st(5u, lf);
+    f_st[6] = sample_st(6u, lf); f_st[7] = sample_st(7u, lf); f_st[8] = sample_st(8u, lf);
+    f_st[9] = sample_st(9u, lf); f_st[10] = sample_st(10u, lf); f_st[11] = sample_st(11u, lf);
+    f_st[12] = sample_st(12u, lf); f_st[13] = sample_st(13u, lf); f_st[14] = sample_st(14u, lf);
+    f_st[15] = sample_st(15u, lf);
 }
 
 // The side planes through the origin and the edges of f_corner (inward normals).
@@ -114,42 +125,64 @@ fn set_sides() {
     }
 }
 
+// Light coordinates (s, t) of this lane's 16 samples: its rays go from the
+// origin to c0 + s eu + t ev (reference::mft::Frustum::st).
+var<private> f_st: array<vec2<f32>, 16>;
 var<private> sh_lo: vec2<f32>;
 var<private> sh_hi: vec2<f32>;
 
-// Grows the rectangle by sample j's light coordinates if its ray is not in `blocked`.
-fn stretch(j: u32, blocked: u32, du: vec3<f32>, dv: vec3<f32>) {
-    if (blocked & (1u << j)) == 0u {
-        let q = light_points[g_lane * 16u + j].xyz - corner(0u);
-        let st = vec2<f32>(dot(q, du), dot(q, dv));
-        sh_lo = min(sh_lo, st);
-        sh_hi = max(sh_hi, st);
-    }
+// The light's edge vectors and the duals that give a point's (s, t) on it.
+struct LightFrame {
+    c0: vec3<f32>,
+    eu: vec3<f32>,
+    ev: vec3<f32>,
+    du: vec3<f32>,
+    dv: vec3<f32>,
 }
 
-fn shrink_to(blocked: u32) {
+fn light_frame() -> LightFrame {
     let c0 = corner(0u);
     let eu = corner(1u) - c0;
     let ev = corner(3u) - c0;
     let n = cross(eu, ev);
     let inv = 1.0 / dot(n, n);
-    let du = cross(ev, n) * inv;
-    let dv = cross(n, eu) * inv;
+    return LightFrame(c0, eu, ev, cross(ev, n) * inv, cross(n, eu) * inv);
+}
+
+fn sample_st(j: u32, lf: LightFrame) -> vec2<f32> {
+    return point_st(light_points[g_lane * 16u + j].xyz, lf);
+}
+
+fn point_st(p: vec3<f32>, lf: LightFrame) -> vec2<f32> {
+    let q = p - lf.c0;
+    return vec2<f32>(dot(q, lf.du), dot(q, lf.dv));
+}
+
+// Grows the rectangle by sample j's light coordinates if its ray is not in `blocked`.
+fn stretch(j: u32, blocked: u32) {
+    if (blocked & (1u << j)) == 0u {
+        sh_lo = min(sh_lo, f_st[j]);
+        sh_hi = max(sh_hi, f_st[j]);
+    }
+}
+
+fn shrink_to(blocked: u32) {
     sh_lo = vec2<f32>(1.0);
     sh_hi = vec2<f32>(0.0);
     // Unrolled on purpose: every loop iteration counts towards lavapipe's limit.
-    stretch(0u, blocked, du, dv); stretch(1u, blocked, du, dv); stretch(2u, blocked, du, dv);
-    stretch(3u, blocked, du, dv); stretch(4u, blocked, du, dv); stretch(5u, blocked, du, dv);
-    stretch(6u, blocked, du, dv); stretch(7u, blocked, du, dv); stretch(8u, blocked, du, dv);
-    stretch(9u, blocked, du, dv); stretch(10u, blocked, du, dv); stretch(11u, blocked, du, dv);
-    stretch(12u, blocked, du, dv); stretch(13u, blocked, du, dv); stretch(14u, blocked, du, dv);
-    stretch(15u, blocked, du, dv);
+    stretch(0u, blocked); stretch(1u, blocked); stretch(2u, blocked); stretch(3u, blocked);
+    stretch(4u, blocked); stretch(5u, blocked); stretch(6u, blocked); stretch(7u, blocked);
+    stretch(8u, blocked); stretch(9u, blocked); stretch(10u, blocked); stretch(11u, blocked);
+    stretch(12u, blocked); stretch(13u, blocked); stretch(14u, blocked); stretch(15u, blocked);
+    let lf = light_frame();
     let lo = max(sh_lo - SHRINK_MARGIN, vec2<f32>(0.0));
     let hi = min(sh_hi + SHRINK_MARGIN, vec2<f32>(1.0));
-    f_corner[0] = c0 + eu * lo.x + ev * lo.y;
-    f_corner[1] = c0 + eu * hi.x + ev * lo.y;
-    f_corner[2] = c0 + eu * hi.x + ev * hi.y;
-    f_corner[3] = c0 + eu * lo.x + ev * hi.y;
+    f_corner[0] = lf.c0 + lf.eu * lo.x + lf.ev * lo.y;
+    f_corner[1] = lf.c0 + lf.eu * hi.x + lf.ev * lo.y;
+    f_corner[2] = lf.c0 + lf.eu * hi.x + lf.ev * hi.y;
+    f_corner[3] = lf.c0 + lf.eu * lo.x + lf.ev * hi.y;
+    f_lo = lo;
+    f_hi = hi;
     set_sides();
     f_shrunk_for = blocked | SHRINK_FLAG;
 }
@@ -199,19 +232,43 @@ fn triangle_wedge(tri: BvhTriangle, o: vec3<f32>) -> Wedge {
     return Wedge(m0, cross(a1, a2), cross(a2, a0), dot(m0, a2));
 }
 
-// Whether the ray from the wedge's origin along `dir` hits the triangle before
-// t_max: inside all three edge planes, and the hit distance |d| / |m·dir| (the
-// sum of the three dots is the dot with the triangle's normal) below t_max.
-fn wedge_hit(w: Wedge, dir: vec3<f32>) -> bool {
-    let s0 = dot(w.m0, dir);
-    let s1 = dot(w.m1, dir);
-    let s2 = dot(w.m2, dir);
-    let inside = select(s0 <= 0.0 && s1 <= 0.0 && s2 <= 0.0, s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0, w.d > 0.0);
-    return inside && abs(w.d) < params.t_max * abs(s0 + s1 + s2);
+// The wedge's three edge functions over the light, E(s, t) = a + b s + c t
+// (one component per edge): m_k . (c0 + s eu + t ev - o), negated when d < 0
+// so that the ray to (s, t) passes through the triangle when all three are
+// >= 0, and reaches it before t_max when |d| < t_max (E.x + E.y + E.z).
+struct EdgeFunctions {
+    a: vec3<f32>,
+    b: vec3<f32>,
+    c: vec3<f32>,
+    limit: f32,
 }
 
-fn ray_bit(j: u32, w: Wedge) -> u32 {
-    return select(0u, 1u << j, wedge_hit(w, f_dirs[j]));
+fn edge_functions(w: Wedge, o: vec3<f32>) -> EdgeFunctions {
+    let c0 = corner(0u);
+    let q = c0 - o;
+    let eu = corner(1u) - c0;
+    let ev = corner(3u) - c0;
+    let sg = select(-1.0, 1.0, w.d > 0.0);
+    return EdgeFunctions(
+        vec3<f32>(dot(w.m0, q), dot(w.m1, q), dot(w.m2, q)) * sg,
+        vec3<f32>(dot(w.m0, eu), dot(w.m1, eu), dot(w.m2, eu)) * sg,
+        vec3<f32>(dot(w.m0, ev), dot(w.m1, ev), dot(w.m2, ev)) * sg,
+        abs(w.d),
+    );
+}
+
+fn edge_values(e: EdgeFunctions, st: vec2<f32>) -> vec3<f32> {
+    return e.a + e.b * st.x + e.c * st.y;
+}
+
+// Whether the ray to light coordinates `st` hits the triangle (before t_max).
+fn st_hit(e: EdgeFunctions, st: vec2<f32>) -> bool {
+    let v = edge_values(e, st);
+    return all(v >= vec3<f32>(0.0)) && e.limit < params.t_max * (v.x + v.y + v.z);
+}
+
+fn ray_bit(j: u32, e: EdgeFunctions) -> u32 {
+    return select(0u, 1u << j, st_hit(e, f_st[j]));
 }
 
 // The triangle lies wholly outside one of this lane's six frustum planes.
@@ -230,24 +287,28 @@ fn planes_cull(tri: BvhTriangle) -> bool {
         || all_outside(params.light_normal, v0 - c0, v1 - c0, v2 - c0);
 }
 
-// Seen from this lane's origin the triangle is edge-on (d == 0), or the whole
-// light lies outside one of its edge planes (corner-ray test): no ray can hit.
-fn wedge_culls(w: Wedge) -> bool {
+// Seen from this lane's origin the triangle is edge-on (d == 0), or the
+// lane's light rectangle lies wholly outside one of its edge planes (the
+// corner-ray test; an edge function is monotonic in s and t, also as rounded,
+// so no sample inside the rectangle is then inside the plane): no ray can hit.
+fn wedge_culls(w: Wedge, e: EdgeFunctions) -> bool {
     if w.d == 0.0 {
         return true;
     }
-    let o = f_origin;
-    let k0 = f_corner[0] - o;
-    let k1 = f_corner[1] - o;
-    let k2 = f_corner[2] - o;
-    let k3 = f_corner[3] - o;
-    return edge_culls(w.m0, w.d, k0, k1, k2, k3) || edge_culls(w.m1, w.d, k0, k1, k2, k3)
-        || edge_culls(w.m2, w.d, k0, k1, k2, k3);
+    let v0 = edge_values(e, f_lo);
+    let v1 = edge_values(e, vec2<f32>(f_hi.x, f_lo.y));
+    let v2 = edge_values(e, f_hi);
+    let v3 = edge_values(e, vec2<f32>(f_lo.x, f_hi.y));
+    return any(max(max(v0, v1), max(v2, v3)) < vec3<f32>(0.0));
 }
 
 // No ray of this lane's frustum can hit the triangle (the culling half of test_triangle).
 fn frustum_culls_triangle(tri: BvhTriangle) -> bool {
-    return planes_cull(tri) || wedge_culls(triangle_wedge(tri, f_origin));
+    if planes_cull(tri) {
+        return true;
+    }
+    let w = triangle_wedge(tri, f_origin);
+    return wedge_culls(w, edge_functions(w, f_origin));
 }
 
 // Per-lane leaves: culls the triangle against this lane's frustum, else tests
@@ -258,14 +319,15 @@ fn test_triangle(tri: BvhTriangle) -> u32 {
         return 0u;
     }
     let w = triangle_wedge(tri, f_origin);
-    if wedge_culls(w) {
+    let e = edge_functions(w, f_origin);
+    if wedge_culls(w, e) {
         return 0u;
     }
     // Unrolled on purpose: every loop iteration counts towards lavapipe's limit.
-    return TESTED | ray_bit(0u, w) | ray_bit(1u, w) | ray_bit(2u, w) | ray_bit(3u, w)
-        | ray_bit(4u, w) | ray_bit(5u, w) | ray_bit(6u, w) | ray_bit(7u, w)
-        | ray_bit(8u, w) | ray_bit(9u, w) | ray_bit(10u, w) | ray_bit(11u, w)
-        | ray_bit(12u, w) | ray_bit(13u, w) | ray_bit(14u, w) | ray_bit(15u, w);
+    return TESTED | ray_bit(0u, e) | ray_bit(1u, e) | ray_bit(2u, e) | ray_bit(3u, e)
+        | ray_bit(4u, e) | ray_bit(5u, e) | ray_bit(6u, e) | ray_bit(7u, e)
+        | ray_bit(8u, e) | ray_bit(9u, e) | ray_bit(10u, e) | ray_bit(11u, e)
+        | ray_bit(12u, e) | ray_bit(13u, e) | ray_bit(14u, e) | ray_bit(15u, e);
 }
 
 // Transposed leaves: whether ray g_lane of frustum f (a lane of this vector)
@@ -274,7 +336,7 @@ fn test_triangle(tri: BvhTriangle) -> u32 {
 fn transposed_ray_hits(tri: BvhTriangle, f: u32) -> bool {
     let o = wg_origins[g_vector_in_wg * 16u + f];
     let w = triangle_wedge(tri, o);
-    return wedge_hit(w, light_points[f * 16u + g_lane].xyz - o);
+    return w.d != 0.0 && st_hit(edge_functions(w, o), point_st(light_points[f * 16u + g_lane].xyz, light_frame()));
 }
 
 @compute @workgroup_size(VEC16_WG_SIZE)
@@ -312,6 +374,7 @@ fn main(ids: Vec16Ids) {
     var alive = 0u;     // frusta not yet done
     var depth = 0u;     // stack depth
     var popping = 0u;   // 1: the next step pops the stack
+    var children = 0u;  // the first child of `node` (when it is an inner node)
     var cand = 0u;      // transposed leaves: frusta still to test against triangle cursor - 1
     var cand_tri: BvhTriangle;  // that triangle, loaded once for all its candidates
     var running = true;
@@ -328,6 +391,7 @@ fn main(ids: Vec16Ids) {
         alive = uniform16(state[base + 5u]);
         depth = uniform16(state[base + 6u]);
         popping = uniform16(state[base + 7u]);
+        children = nodes[node].first;
         cand = uniform16(state[base + ST_CAND]);
         if cand != 0u {
             cand_tri = triangles[cursor - 1u];
@@ -347,18 +411,21 @@ fn main(ids: Vec16Ids) {
         mask = ballot16(!is_done() && frustum_may_hit_box(root));
         n_boxes = 1u;
         running = mask != 0u;
+        children = root.first;
         if root.count > 0u {
             cursor = root.first;
             end = root.first + root.count;
         }
     }
 
-    // One step per iteration: one triangle of a leaf, one stack pop, or one
-    // inner node; with transposed leaves, the inner loop after it tests the
-    // triangle's candidate frusta. Every pass of either loop is counted, as
-    // lavapipe counts it towards its limit: a loop nested in another costs it
-    // a pass each time the outer body runs, even when no lane enters it. So
-    // nothing else loops in here (the state is saved after the loop).
+    // Each pass of the loop may do, in this order: one stack pop, one inner
+    // node, one triangle of a leaf (with transposed leaves, then the inner loop
+    // over the triangle's candidate frusta) and the end of a leaf. lavapipe
+    // runs every branch of the body (masked) at every pass, so a pass that did
+    // only one of them would pay for all four; and it counts every pass of
+    // either loop towards its limit: a loop nested in another costs it a pass
+    // each time the outer body runs, even when no lane enters it. So nothing
+    // else loops in here (the state is saved after the loop).
     var iterations = 0u;
     var suspended = false;
     loop {
@@ -370,7 +437,58 @@ fn main(ids: Vec16Ids) {
             break;
         }
         iterations += 1u;
-        var enter = false;
+        let between_leaves = cand == 0u && cursor >= end;
+        if between_leaves && popping != 0u {
+            if depth == 0u {
+                running = false;
+            } else {
+                depth -= 1u;
+                let m = stack_mask[depth] & alive;
+                if m != 0u {
+                    node = stack_node[depth];
+                    mask = m;
+                    popping = 0u;
+                    let c = nodes[node];
+                    children = c.first;
+                    if c.count > 0u {
+                        cursor = c.first;
+                        end = c.first + c.count;
+                    }
+                }
+            }
+        }
+        if running && between_leaves && popping == 0u && cursor >= end {
+            let l = children;
+            let nl = nodes[l];
+            let nr = nodes[l + 1u];
+            n_nodes += 1u;
+            n_boxes += 2u;
+            let mine = (mask & (1u << g_lane)) != 0u && !is_done();
+            let ml = ballot16(mine && frustum_may_hit_box(nl));
+            let mr = ballot16(mine && frustum_may_hit_box(nr));
+            // Into the child more frusta want first.
+            let d = descend(l, ml, mr, countOneBits(mr) > countOneBits(ml));
+            if d.later_mask != 0u {
+                // The host checked that the BVH is shallower than the stack.
+                stack_node[min(depth, STACK_SIZE - 1u)] = d.later;
+                stack_mask[min(depth, STACK_SIZE - 1u)] = d.later_mask;
+                depth += 1u;
+            }
+            if d.mask != 0u {
+                node = d.node;
+                mask = d.mask;
+                let right = d.node != l;
+                let first = select(nl.first, nr.first, right);
+                let count = select(nl.count, nr.count, right);
+                children = first;
+                if count > 0u {
+                    cursor = first;
+                    end = first + count;
+                }
+            } else {
+                popping = 1u;
+            }
+        }
         var in_leaf = false;
         if cand != 0u || cursor < end {
             in_leaf = true;
@@ -398,40 +516,21 @@ fn main(ids: Vec16Ids) {
                     }
                 }
             }
-        } else if popping != 0u {
-            if depth == 0u {
-                running = false;
-            } else {
-                depth -= 1u;
-                let m = stack_mask[depth] & alive;
-                if m != 0u {
-                    node = stack_node[depth];
-                    mask = m;
-                    popping = 0u;
-                    enter = true;
-                }
-            }
-        } else {
-            let l = nodes[node].first;
-            n_nodes += 1u;
-            n_boxes += 2u;
+        }
+        if !LEAF_TRANSPOSED && cursor < end {
+            let tri = triangles[cursor];
+            cursor += 1u;
+            n_tris += 1u;
             let mine = (mask & (1u << g_lane)) != 0u && !is_done();
-            let ml = ballot16(mine && frustum_may_hit_box(nodes[l]));
-            let mr = ballot16(mine && frustum_may_hit_box(nodes[l + 1u]));
-            // Into the child more frusta want first.
-            let d = descend(l, ml, mr, countOneBits(mr) > countOneBits(ml));
-            if d.later_mask != 0u {
-                // The host checked that the BVH is shallower than the stack.
-                stack_node[min(depth, STACK_SIZE - 1u)] = d.later;
-                stack_mask[min(depth, STACK_SIZE - 1u)] = d.later_mask;
-                depth += 1u;
+            var r = 0u;
+            if mine {
+                r = test_triangle(tri);
             }
-            if d.mask != 0u {
-                node = d.node;
-                mask = d.mask;
-                enter = true;
-            } else {
-                popping = 1u;
+            f_occluded |= r & MASK_FULL;
+            if COUNTERS {
+                let tested = ballot16((r & TESTED) != 0u);
+                n_tests += countOneBits(tested);
+                n_after_culling += u32(tested != 0u);
             }
         }
         if LEAF_TRANSPOSED {
@@ -459,13 +558,6 @@ fn main(ids: Vec16Ids) {
             alive = ballot16(!is_done());
             running = alive != 0u;
             popping = 1u;
-        }
-        if enter {
-            let c = nodes[node];
-            if c.count > 0u {
-                cursor = c.first;
-                end = c.first + c.count;
-            }
         }
     }
     if COUNTERS && g_lane == 0u {

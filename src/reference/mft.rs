@@ -11,7 +11,7 @@
 //! sit at least ½⁄256 of an edge inside the light), so the culling below is
 //! conservative.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::descend::descend;
 use super::shadow::{MASK_FULL, MASK_SKY, initial_mask, light_corners};
@@ -37,6 +37,42 @@ fn side_planes(o: Vec3, c: &[Vec3; 4]) -> [Vec3; 4] {
     })
 }
 
+/// The light's corner `c0`, edges `eu = c1 − c0`, `ev = c3 − c0`, and the
+/// duals `du`, `dv` that give a point's light coordinates (s, t).
+struct LightFrame {
+    c0: Vec3,
+    eu: Vec3,
+    ev: Vec3,
+    du: Vec3,
+    dv: Vec3,
+}
+
+impl LightFrame {
+    fn new(params: &ShadowParams) -> LightFrame {
+        let c = light_corners(params);
+        let (eu, ev) = (c[1] - c[0], c[3] - c[0]);
+        let n = eu.cross(ev);
+        let inv = 1.0 / n.dot(n);
+        LightFrame {
+            c0: c[0],
+            eu,
+            ev,
+            du: ev.cross(n) * inv,
+            dv: n.cross(eu) * inv,
+        }
+    }
+
+    /// Light coordinates of a point on the light (the kernel's `point_st`).
+    fn st(&self, p: Vec3) -> Vec2 {
+        let q = p - self.c0;
+        Vec2::new(q.dot(self.du), q.dot(self.dv))
+    }
+
+    fn at(&self, st: Vec2) -> Vec3 {
+        self.c0 + self.eu * st.x + self.ev * st.y
+    }
+}
+
 /// One lane's frustum and its rays.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Frustum {
@@ -47,14 +83,16 @@ pub struct Frustum {
     /// The light rectangle the frustum bounds: the light's corners, or after
     /// shrinking those of the part that holds the still-active samples.
     corners: [Vec3; 4],
+    /// The same rectangle in light coordinates: its lowest and highest (s, t).
+    lo: Vec2,
+    hi: Vec2,
     /// With [`SHRINK_FLAG`]: the blocked-ray mask `corners` were last shrunk for.
     shrunk_for: u32,
-    /// The lane's sample set.
-    set: usize,
     /// The mask before any triangle (rays below the horizon).
     initial: u32,
-    /// Ray directions `light point − origin` of the lane's 16 samples.
-    dirs: [Vec3; SAMPLES_PER_SET],
+    /// Light coordinates (s, t) of the lane's 16 samples: ray j goes from the
+    /// origin to `c0 + s·eu + t·ev`.
+    st: [Vec2; SAMPLES_PER_SET],
     /// Blocked rays (bits 0..16), or [`MASK_SKY`].
     occluded: u32,
 }
@@ -64,14 +102,16 @@ impl Frustum {
     pub fn new(texel: &GBufferTexel, set: usize, light_points: &[Vec3], params: &ShadowParams) -> Frustum {
         let o = texel.origin;
         let c = light_corners(params);
+        let frame = LightFrame::new(params);
         Frustum {
             origin: o,
             geo_normal: texel.geo_normal,
             side: side_planes(o, &c),
             corners: c,
+            lo: Vec2::ZERO,
+            hi: Vec2::ONE,
             shrunk_for: 0,
-            set,
-            dirs: std::array::from_fn(|j| light_points[set * SAMPLES_PER_SET + j] - o),
+            st: std::array::from_fn(|j| frame.st(light_points[set * SAMPLES_PER_SET + j])),
             occluded: initial_mask(texel, set, light_points, params),
             initial: initial_mask(texel, set, light_points, params),
         }
@@ -82,39 +122,37 @@ impl Frustum {
     /// [`SHRINK_MARGIN`]) that holds the samples not yet blocked in `blocked`. Rays
     /// already blocked need no more tests, so culling against the smaller frustum
     /// gives the same mask with fewer triangle tests.
-    pub fn shrink_to(&mut self, blocked: u32, light_points: &[Vec3], params: &ShadowParams) {
-        let c = light_corners(params);
-        let (eu, ev) = (c[1] - c[0], c[3] - c[0]);
-        let n = eu.cross(ev);
-        let inv = 1.0 / n.dot(n);
-        let du = ev.cross(n) * inv;
-        let dv = n.cross(eu) * inv;
-        let (mut lo, mut hi) = (glam::Vec2::ONE, glam::Vec2::ZERO);
-        for j in 0..SAMPLES_PER_SET {
+    pub fn shrink_to(&mut self, blocked: u32, params: &ShadowParams) {
+        let frame = LightFrame::new(params);
+        let (mut lo, mut hi) = (Vec2::ONE, Vec2::ZERO);
+        for (j, st) in self.st.iter().enumerate() {
             if blocked & (1 << j) == 0 {
-                let q = light_points[self.set * SAMPLES_PER_SET + j] - c[0];
-                let st = glam::Vec2::new(q.dot(du), q.dot(dv));
-                lo = lo.min(st);
-                hi = hi.max(st);
+                lo = lo.min(*st);
+                hi = hi.max(*st);
             }
         }
-        lo = (lo - SHRINK_MARGIN).max(glam::Vec2::ZERO);
-        hi = (hi + SHRINK_MARGIN).min(glam::Vec2::ONE);
-        let at = |s: f32, t: f32| c[0] + eu * s + ev * t;
-        self.corners = [at(lo.x, lo.y), at(hi.x, lo.y), at(hi.x, hi.y), at(lo.x, hi.y)];
+        lo = (lo - SHRINK_MARGIN).max(Vec2::ZERO);
+        hi = (hi + SHRINK_MARGIN).min(Vec2::ONE);
+        self.corners = [
+            frame.at(lo),
+            frame.at(Vec2::new(hi.x, lo.y)),
+            frame.at(hi),
+            frame.at(Vec2::new(lo.x, hi.y)),
+        ];
+        (self.lo, self.hi) = (lo, hi);
         self.side = side_planes(self.origin, &self.corners);
         self.shrunk_for = blocked | SHRINK_FLAG;
     }
 
     /// Shrinks after a leaf if a ray was blocked since the last time (or since the start).
-    fn shrink_after_leaf(&mut self, light_points: &[Vec3], params: &ShadowParams) {
+    fn shrink_after_leaf(&mut self, params: &ShadowParams) {
         let last = if self.shrunk_for & SHRINK_FLAG != 0 {
             self.shrunk_for & MASK_FULL
         } else {
             self.initial
         };
         if !self.is_done() && self.occluded != last {
-            self.shrink_to(self.occluded, light_points, params);
+            self.shrink_to(self.occluded, params);
         }
     }
 
@@ -153,11 +191,14 @@ pub enum TriangleOutcome {
 ///
 /// With `a_i = v_i − origin`, the edge normals `m0 = a0×a1`, `m1 = a1×a2`,
 /// `m2 = a2×a0` and `D = m0·a2` (six times the signed volume of the
-/// tetrahedron origin–triangle): ray `d` passes through the triangle when
-/// `m_e·d` all have the sign of `D` (edges inclusive: a shared edge gives
-/// exactly negated normals to its two triangles), and it reaches the
-/// triangle's plane at `t = D / (m0+m1+m2)·d`, so it hits when `|D| <
-/// t_max·|Σ m_e·d|`. No division, and all four dot products share `d`.
+/// tetrahedron origin–triangle): the ray to light point `p` passes through the
+/// triangle when the `m_e·(p − origin)` all have the sign of `D` (edges
+/// inclusive: a shared edge gives exactly negated normals to its two
+/// triangles), and it reaches the triangle's plane at `t = D / Σ m_e·(p −
+/// origin)`, so it hits when `|D| < t_max·|Σ m_e·(p − origin)|`. With `p = c0 +
+/// s·eu + t·ev` each `m_e·(p − origin)` is an edge function `a + b·s + c·t` of
+/// the sample's light coordinates: three dot products per edge and triangle,
+/// then two multiply-adds per edge and ray.
 pub fn frustum_test_triangle(f: &Frustum, tri: &BvhTriangle, params: &ShadowParams) -> TriangleOutcome {
     let o = f.origin;
     let (v0, v1, v2) = (tri.v0, tri.v0 + tri.e1, tri.v0 + tri.e2);
@@ -184,37 +225,64 @@ pub fn frustum_test_triangle(f: &Frustum, tri: &BvhTriangle, params: &ShadowPara
         // The origin lies in the triangle's plane: no ray crosses it.
         return TriangleOutcome::Culled;
     }
-    // Corner rays: if all four light corners lie strictly outside one edge
-    // plane, so does every ray (the paper's corner-ray culling, shared origin).
-    let k = f.corners;
-    let (k0, k1, k2, k3) = (k[0] - o, k[1] - o, k[2] - o, k[3] - o);
-    let edge_culls = |m: Vec3| {
-        let s = [m.dot(k0), m.dot(k1), m.dot(k2), m.dot(k3)];
-        if d > 0.0 {
-            s.iter().all(|&x| x < 0.0)
-        } else {
-            s.iter().all(|&x| x > 0.0)
-        }
-    };
-    if edge_culls(m0) || edge_culls(m1) || edge_culls(m2) {
+    let e = EdgeFunctions::new([m0, m1, m2], d, o, params);
+    // Corner rays: if the frustum's whole light rectangle lies outside one
+    // edge plane, so does every ray (the paper's corner-ray culling, shared
+    // origin). Edge functions are monotonic in s and t, also as rounded, so a
+    // sample inside the rectangle cannot be inside the plane then.
+    let corners = [
+        e.at(f.lo),
+        e.at(Vec2::new(f.hi.x, f.lo.y)),
+        e.at(f.hi),
+        e.at(Vec2::new(f.lo.x, f.hi.y)),
+    ];
+    let highest = corners[0].max(corners[1]).max(corners[2].max(corners[3]));
+    if highest.cmplt(Vec3::ZERO).any() {
         return TriangleOutcome::Culled;
     }
-    let limit = d.abs();
-    let mut hits = 0u32;
-    for (j, dir) in f.dirs.iter().enumerate() {
-        let s0 = m0.dot(*dir);
-        let s1 = m1.dot(*dir);
-        let s2 = m2.dot(*dir);
-        let inside = if d > 0.0 {
-            s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0
-        } else {
-            s0 <= 0.0 && s1 <= 0.0 && s2 <= 0.0
-        };
-        if inside && limit < params.t_max * (s0 + s1 + s2).abs() {
-            hits |= 1 << j;
+    let hits =
+        f.st.iter()
+            .enumerate()
+            .filter(|(_, st)| e.hit(**st, params.t_max))
+            .fold(0u32, |m, (j, _)| m | 1 << j);
+    TriangleOutcome::Tested(hits)
+}
+
+/// A triangle's three edge functions over the light seen from one origin,
+/// one per component: `E(s, t) = a + b·s + c·t` (the kernel's `EdgeFunctions`),
+/// negated when `D < 0` so that inside means all three ≥ 0.
+struct EdgeFunctions {
+    a: Vec3,
+    b: Vec3,
+    c: Vec3,
+    /// `|D|`.
+    limit: f32,
+}
+
+impl EdgeFunctions {
+    fn new(m: [Vec3; 3], d: f32, o: Vec3, params: &ShadowParams) -> EdgeFunctions {
+        let c = light_corners(params);
+        let q = c[0] - o;
+        let (eu, ev) = (c[1] - c[0], c[3] - c[0]);
+        let sg = if d > 0.0 { 1.0 } else { -1.0 };
+        let dots = |v: Vec3| Vec3::new(m[0].dot(v), m[1].dot(v), m[2].dot(v)) * sg;
+        EdgeFunctions {
+            a: dots(q),
+            b: dots(eu),
+            c: dots(ev),
+            limit: d.abs(),
         }
     }
-    TriangleOutcome::Tested(hits)
+
+    fn at(&self, st: Vec2) -> Vec3 {
+        self.a + self.b * st.x + self.c * st.y
+    }
+
+    /// The ray to light coordinates `st` hits the triangle before `t_max`.
+    fn hit(&self, st: Vec2, t_max: f32) -> bool {
+        let v = self.at(st);
+        v.cmpge(Vec3::ZERO).all() && self.limit < t_max * (v.x + v.y + v.z)
+    }
 }
 
 pub use super::counters::Counters;
@@ -260,12 +328,35 @@ impl VectorState {
     }
 }
 
+/// How the twin runs a tile, as the kernel was compiled and dispatched.
+#[derive(Clone, Copy, Debug)]
+pub struct TileOptions {
+    /// Loop steps per dispatch (the kernel's `iteration_budget`): when they run
+    /// out, the state is kept and traversal resumes, exactly as the GPU resumes
+    /// a suspended tile in its next dispatch.
+    pub budget: u32,
+    /// Frustum shrinking ([`Frustum::shrink_to`]) after every leaf (`SHRINK`).
+    pub shrink: bool,
+    /// Transposed leaves (`LEAF_TRANSPOSED`): one triangle per step, then one
+    /// more step per frustum left after culling; otherwise up to two triangles
+    /// per step. The masks are the same either way; the steps (and so the
+    /// suspensions) are not.
+    pub transposed: bool,
+}
+
+impl TileOptions {
+    /// Per-lane leaves without shrinking, `budget` steps per dispatch.
+    pub fn with_budget(budget: u32) -> TileOptions {
+        TileOptions {
+            budget,
+            shrink: false,
+            transposed: false,
+        }
+    }
+}
+
 /// Traces one 4×4 tile's 16 frusta; returns the 16 occlusion masks (lane order).
-///
-/// Each loop iteration is one step, as in the kernel: one leaf triangle, one
-/// stack pop, or one inner node. `budget` mimics the kernel's per-dispatch
-/// iteration budget: when it runs out, the state is kept and traversal
-/// resumes, exactly as the GPU resumes a suspended tile in its next dispatch.
+/// [`trace_tile_with`] with [`TileOptions::with_budget`].
 pub fn trace_tile(
     bvh: &Bvh,
     frusta: [Frustum; 16],
@@ -273,17 +364,45 @@ pub fn trace_tile(
     budget: u32,
     counters: &mut Counters,
 ) -> [u32; 16] {
-    trace_tile_with(bvh, frusta, params, budget, None, counters)
+    trace_tile_with(bvh, frusta, params, &TileOptions::with_budget(budget), counters)
 }
 
-/// [`trace_tile`], with frustum shrinking ([`Frustum::shrink_to`]) after every leaf
-/// when `shrink` gives the light points.
+/// The next triangle of the current leaf against every frustum that entered
+/// it and is not done; returns the frusta that were left after culling.
+fn leaf_triangle(
+    bvh: &Bvh,
+    st: &mut VectorState,
+    frusta: &mut [Frustum; 16],
+    params: &ShadowParams,
+    counters: &mut Counters,
+) -> u32 {
+    let tri = &bvh.triangles[st.cursor as usize];
+    st.cursor += 1;
+    counters.triangles_accessed += 1;
+    let mut survived = 0u32;
+    for (i, f) in frusta.iter_mut().enumerate() {
+        if st.mask & (1 << i) != 0 && !f.is_done() {
+            if let TriangleOutcome::Tested(hits) = frustum_test_triangle(f, tri, params) {
+                survived |= 1 << i;
+                f.occluded |= hits;
+            }
+        }
+    }
+    counters.triangle_tests += u64::from(survived.count_ones());
+    counters.triangles_after_culling += u64::from(survived != 0);
+    survived
+}
+
+/// [`trace_tile`] under `options`.
+///
+/// Each loop iteration is one step of the kernel, which may do, in this
+/// order: one stack pop, one inner node, one or two leaf triangles, and the
+/// end of a leaf (see `shaders/shadow_mft.wgsl` for why).
 pub fn trace_tile_with(
     bvh: &Bvh,
     mut frusta: [Frustum; 16],
     params: &ShadowParams,
-    budget: u32,
-    shrink: Option<&[Vec3]>,
+    options: &TileOptions,
     counters: &mut Counters,
 ) -> [u32; 16] {
     let mut st = VectorState {
@@ -297,41 +416,21 @@ pub fn trace_tile_with(
     counters.box_tests += 1;
     let mut running = root_mask != 0;
     st.enter(bvh, 0, root_mask);
+    // Transposed leaves: the frusta still to be tested (one step each) against
+    // triangle cursor − 1. Their bits are already in `frusta`: each frustum's
+    // rays depend on nothing the other candidates change.
+    let mut cand = 0u32;
     let mut iterations = 0u32;
     while running {
-        if iterations == budget {
+        if iterations >= options.budget {
             // Suspend: on the GPU the state goes to memory and the next dispatch resumes it.
             counters.suspensions += 1;
             iterations = 0;
         }
         iterations += 1;
         counters.traversal_steps += 1;
-        if st.cursor < st.end {
-            let tri = &bvh.triangles[st.cursor as usize];
-            st.cursor += 1;
-            counters.triangles_accessed += 1;
-            let mut survived = 0;
-            for (i, f) in frusta.iter_mut().enumerate() {
-                if st.mask & (1 << i) != 0 && !f.is_done() {
-                    if let TriangleOutcome::Tested(hits) = frustum_test_triangle(f, tri, params) {
-                        survived += 1;
-                        f.occluded |= hits;
-                    }
-                }
-            }
-            counters.triangle_tests += survived;
-            counters.triangles_after_culling += u64::from(survived > 0);
-            if st.cursor == st.end {
-                if let Some(points) = shrink {
-                    for f in frusta.iter_mut() {
-                        f.shrink_after_leaf(points, params);
-                    }
-                }
-                st.alive = ballot(&frusta, |_, f| !f.is_done());
-                running = st.alive != 0;
-                st.popping = true;
-            }
-        } else if st.popping {
+        let between_leaves = cand == 0 && st.cursor >= st.end;
+        if between_leaves && st.popping {
             match st.stack.pop() {
                 None => running = false,
                 Some((c, m)) if m & st.alive != 0 => {
@@ -340,7 +439,8 @@ pub fn trace_tile_with(
                 }
                 Some(_) => {}
             }
-        } else {
+        }
+        if running && between_leaves && !st.popping && st.cursor >= st.end {
             let l = bvh.nodes[st.node as usize].first;
             counters.nodes_visited += 1;
             counters.box_tests += 2;
@@ -363,6 +463,37 @@ pub fn trace_tile_with(
                 Some((c, m)) => st.enter(bvh, c, m),
                 None => st.popping = true,
             }
+        }
+        let in_leaf = cand != 0 || st.cursor < st.end;
+        if cand == 0 && st.cursor < st.end {
+            let survived = leaf_triangle(bvh, &mut st, &mut frusta, params, counters);
+            if options.transposed {
+                cand = survived;
+            }
+        }
+        if !options.transposed && st.cursor < st.end {
+            leaf_triangle(bvh, &mut st, &mut frusta, params, counters);
+        }
+        if options.transposed {
+            // The kernel's inner loop: a step per candidate, and one that ends it.
+            loop {
+                iterations += 1;
+                counters.traversal_steps += 1;
+                if cand == 0 || iterations >= options.budget {
+                    break;
+                }
+                cand &= cand - 1;
+            }
+        }
+        if in_leaf && cand == 0 && st.cursor == st.end {
+            if options.shrink {
+                for f in frusta.iter_mut() {
+                    f.shrink_after_leaf(params);
+                }
+            }
+            st.alive = ballot(&frusta, |_, f| !f.is_done());
+            running = st.alive != 0;
+            st.popping = true;
         }
     }
     frusta.map(|f| f.occluded)
@@ -427,8 +558,11 @@ pub fn mft_masks_with(
                                     bvh,
                                     frusta,
                                     params,
-                                    budget,
-                                    shrink.then_some(light_points),
+                                    &TileOptions {
+                                        budget,
+                                        shrink,
+                                        transposed: false,
+                                    },
                                     &mut counters,
                                 ),
                             ));
