@@ -207,11 +207,11 @@ fn embedded_pass_matches_the_standalone_renderer_except_where_primary_hits_diffe
                 let diff = (e.masks[p] ^ frame.masks[p]).count_ones();
                 mask_pixels += usize::from(diff > 0);
                 mask_rays += diff as usize;
-                // The filter mixes a 4×4 window: compare where the whole window agrees in
+                // The filter mixes a 5×5 window: compare where the whole window agrees in
                 // primary hit and mask, so that the only difference left is rounding.
                 let (x, y) = (p as i64 % i64::from(w), p as i64 / i64::from(w));
-                let window_agrees = (-1..=2).all(|dy| {
-                    (-1..=2).all(|dx| {
+                let window_agrees = (-2..=2).all(|dy| {
+                    (-2..=2).all(|dx| {
                         let (nx, ny) = (x + dx, y + dy);
                         let q = (ny * i64::from(w) + nx) as usize;
                         nx < 0

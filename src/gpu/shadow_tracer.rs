@@ -81,7 +81,8 @@ impl VectorVariant {
 ///
 /// `PerLane` is the default because it is the faster one on lavapipe, by 1.2–2.2×.
 /// Shadow pass, GPU ms, min / median of 3 runs (Mrays/s at the median), 256×256,
-/// `penumbra render`, Mesa 22.3.6 lavapipe on 2 AVX-512 cores:
+/// `penumbra render`, Mesa 22.3.6 lavapipe on 2 AVX-512 cores (measured before the per-lane
+/// form took two triangles per loop step, which made it faster still):
 ///
 /// | scene, vector                          | per-lane          | transposed        |
 /// |----------------------------------------|-------------------|-------------------|
@@ -93,12 +94,13 @@ impl VectorVariant {
 /// (subgroup: `LP_NATIVE_VECTOR_WIDTH=512`, 16-wide subgroups; workgroup: the default
 /// 8-wide build.) Lavapipe loads memory one lane at a time, so the transposed form
 /// pays two gathers (an origin, a light point) per surviving frustum where the per-lane
-/// form reuses directions held in registers; and its ballots cost barriers in the
+/// form reuses the samples' light coordinates held in registers; and its ballots cost barriers in the
 /// workgroup vector. On a GPU, whose loads and ballots are cheap, the balance may differ.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum LeafMode {
     /// Lane `j` culls the triangle against its own frustum and, if it survives, tests the
-    /// frustum's 16 rays itself (unrolled): no cross-lane traffic, one loop step per triangle.
+    /// frustum's 16 rays itself (unrolled): no cross-lane traffic, up to two triangles per
+    /// loop step.
     #[default]
     PerLane,
     /// The paper's form: lane `j` only culls; then for each frustum `f` that survives (a

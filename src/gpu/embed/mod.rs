@@ -66,7 +66,7 @@ use crate::{Error, Result, sampling};
 const PIXEL_GROUP: u32 = 8;
 
 /// How the embedded pass traces and filters. Rays per pixel are fixed at 16 (one sample
-/// set of the 256-point pattern; the filter's 4×4 window gathers all 256).
+/// set of the 256-point pattern; the filter's 4-pixel box gathers all 256).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadowSettings {
     /// The discontinuity filter's `(depth_tolerance, normal_tolerance)` (see
