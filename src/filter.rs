@@ -152,7 +152,8 @@ pub fn discontinuity_filter(
 }
 
 /// The filtered value of pixel `(x, y)`: the mean of `values` over the pixels
-/// of the window `x−1 ..= x+2`, `y−1 ..= y+2` (clipped to the image) whose
+/// of the centred window `x−2 ..= x+2`, `y−2 ..= y+2` (outer ring at half
+/// weight, corners a quarter; clipped to the image) whose
 /// depth and normal are close to the centre's (see [`FilterParams`]).
 ///
 /// Neighbours with no hit (depth ≤ 0) are never used. A centre with no hit is

@@ -26,6 +26,7 @@ pub mod assets;
 pub mod bvh;
 pub mod counters;
 mod error;
+pub mod error_regions;
 pub mod filter;
 pub mod frame;
 pub mod gpu;

@@ -1,11 +1,14 @@
 //! `penumbra quality`: how close each way of computing visibility gets to the
 //! exact answer (beam splitting) on the same G-buffer: MFT 16 spp with and
-//! without the filter, and the reference tracer at 64 and 256 rays per pixel.
+//! without the filter, and the reference tracer at 64 and 256 rays per pixel;
+//! then where each one's error lies ([`penumbra::error_regions`]).
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use penumbra::bvh::Bvh;
+use penumbra::error_regions::{Region, RegionError, classify_pixels, error_by_region};
+use penumbra::filter::FilterParams;
 use penumbra::gpu::{FrameSettings, GpuContext, GpuOptions, GpuScene, Renderer, RendererOptions, Tracer};
 use penumbra::metrics::ImageMetrics;
 use penumbra::output::{FloatImage, write_float_image};
@@ -68,6 +71,8 @@ struct MethodResult {
     mean_abs: f64,
     max_abs: f64,
     psnr: f64,
+    /// Its error by region of the image (geometric edges, sharp transitions, …).
+    regions: Vec<RegionError>,
 }
 
 #[derive(Debug, Serialize)]
@@ -80,6 +85,26 @@ struct QualityReport {
     pixels: usize,
     exact_cpu_seconds: f64,
     methods: Vec<MethodResult>,
+}
+
+/// Prints, per region, its share of the pixels, then per method the region's
+/// share of the squared error and its RMSE.
+fn print_regions(results: &[MethodResult]) {
+    println!("error by region: share of the squared error (RMSE in the region)");
+    print!("  {:<18} {:>7}", "region", "pixels");
+    for r in results {
+        print!(" {:>18}", r.method);
+    }
+    println!();
+    for (i, region) in Region::ALL.iter().enumerate() {
+        let share = results.first().map_or(0.0, |r| r.regions[i].pixel_share);
+        print!("  {:<18} {:>6.1}%", region.name(), 100.0 * share);
+        for r in results {
+            let e = &r.regions[i];
+            print!(" {:>9.1}% ({:.4})", 100.0 * e.error_share, e.rmse);
+        }
+        println!();
+    }
 }
 
 /// Renders every method, prints its errors against exact visibility.
@@ -163,6 +188,19 @@ pub fn run(args: &QualityArgs) -> Result<()> {
         "  {:<18} {:>10} {:>9} {:>9} {:>9} {:>8}",
         "method", "GPU ms", "RMSE", "mean |e|", "max |e|", "PSNR dB"
     );
+    let mut regions = classify_pixels(
+        &gbuffer,
+        &exact,
+        w,
+        h,
+        &FilterParams::with_tolerances(w, h, args.depth_tolerance, args.normal_tolerance),
+    );
+    // The same pixels as the metrics above.
+    for (region, hit) in regions.iter_mut().zip(&hit) {
+        if !hit {
+            *region = None;
+        }
+    }
     let mut results = Vec::new();
     for (name, values, ms) in &methods {
         let m = ImageMetrics::of_values(&pick(values), &exact_hit);
@@ -177,8 +215,10 @@ pub fn run(args: &QualityArgs) -> Result<()> {
             mean_abs: m.mean_abs,
             max_abs: m.max_abs,
             psnr: m.psnr,
+            regions: error_by_region(values, &exact, &regions),
         });
     }
+    print_regions(&results);
     if let Some(dir) = &args.images {
         std::fs::create_dir_all(dir).map_err(|source| Error::Io {
             path: dir.clone(),

@@ -396,7 +396,7 @@ impl Renderer {
 
 /// Bytes of the largest per-pixel buffer (the G-buffer).
 const LARGEST_PIXEL_BYTES: u64 = size_of::<GBufferTexel>() as u64;
-/// Margin around a tile, for the filter's 4×4 window (a multiple of 4: sample sets).
+/// Margin around a tile, for the filter's window (reaches 2 pixels out; a multiple of 4: sample sets).
 const TILE_MARGIN: u32 = 4;
 
 /// The largest tile side (a multiple of 4) whose margined G-buffer fits `limit` bytes.
