@@ -53,6 +53,26 @@ fn quality_reports_every_method_on_the_generated_scenes() {
         // More rays, less error: a sanity check on the yardstick itself.
         assert!(rmse(3) < rmse(2) && rmse(2) < rmse(1), "{scene}: {stdout}");
         assert!(report["pixels"].as_u64().unwrap() > 48 * 40 / 2);
+        // Each method's error split by region: four regions, pixel and error shares
+        // summing to 1, and the regions' RMSEs recombining to the method's.
+        for (i, m) in methods.iter().enumerate() {
+            let regions = m["regions"].as_array().unwrap();
+            assert_eq!(regions.len(), 4, "{scene}: {m}");
+            let sum = |key: &str| regions.iter().map(|r| r[key].as_f64().unwrap()).sum::<f64>();
+            assert!((sum("pixel_share") - 1.0).abs() < 1e-9, "{scene}: {m}");
+            assert!((sum("error_share") - 1.0).abs() < 1e-9, "{scene}: {m}");
+            let mse: f64 = regions
+                .iter()
+                .map(|r| r["pixel_share"].as_f64().unwrap() * r["rmse"].as_f64().unwrap().powi(2))
+                .sum();
+            assert!(
+                (mse.sqrt() - rmse(i)).abs() < 1e-6 * rmse(i).max(1e-3),
+                "{scene}: regions recombine to RMSE {} not {}",
+                mse.sqrt(),
+                rmse(i)
+            );
+        }
+        assert!(stdout.contains("error by region"), "{stdout}");
     }
 }
 
