@@ -155,10 +155,10 @@ pub fn discontinuity_filter(
     filtered
 }
 
-/// The filtered value of pixel `(x, y)`: the mean of `values` over the pixels
-/// of the centred window `x−2 ..= x+2`, `y−2 ..= y+2` (outer ring at half
-/// weight, corners a quarter; clipped to the image) whose
-/// depth and normal are close to the centre's (see [`FilterParams`]).
+/// The filtered value of pixel `(x, y)`: the weighted mean of `values` over the
+/// pixels of the centred window `x−2 ..= x+2`, `y−2 ..= y+2` (outer ring at
+/// half weight, corners a quarter; clipped to the image) whose depth, normal
+/// and unfiltered visibility are close to the centre's (see [`FilterParams`]).
 ///
 /// Neighbours with no hit (depth ≤ 0) are never used. A centre with no hit is
 /// returned unchanged. The centre always counts itself, whatever the
