@@ -1,12 +1,13 @@
 //! Where a visibility image's error against exact visibility lies, for
 //! `penumbra quality`: each pixel with geometry falls in one [`Region`] — a
-//! geometric edge inside its filter window, a sharp shadow transition, a wide
+//! geometric edge inside its filter window (the filter's own
+//! [`same_surface`] test), a sharp shadow transition, other
 //! penumbra, or plain light or umbra — and [`error_by_region`] gives each
 //! region's RMSE and share of the squared error. The regions are those the
 //! discontinuity filter treats differently, so the table says which of its
 //! tests (geometry, visibility) the remaining error comes from.
 
-use crate::filter::FilterParams;
+use crate::filter::{FilterParams, same_surface};
 use crate::layout::GBufferTexel;
 
 /// Exact visibility within this of 0 or 1 counts as umbra or fully lit.
@@ -88,9 +89,7 @@ pub fn classify_pixels(
                 for nx in (x - 2).max(0)..=(x + 2).min(w - 1) {
                     let ix = (ny * w + nx) as usize;
                     let t = &gbuffer[ix];
-                    edge |= t.depth <= 0.0
-                        || (t.depth - c.depth).abs() > params.depth_tolerance * c.depth
-                        || t.normal.dot(c.normal) < params.normal_tolerance;
+                    edge |= !same_surface(params, c.depth, c.normal.to_array(), t.depth, t.normal.to_array());
                     lo = lo.min(exact[ix]);
                     hi = hi.max(exact[ix]);
                 }

@@ -207,13 +207,7 @@ pub fn filter_pixel(
                 continue;
             }
             let ix = ny as usize * width + nx as usize;
-            let d_n = depth[ix];
-            let n_n = normal[ix];
-            // Written out rather than glam's dot to fix the order of the sum (the kernel's too).
-            let cos_nc = n_n[0] * n_c[0] + n_n[1] * n_c[1] + n_n[2] * n_c[2];
-            let similar = d_n > 0.0
-                && (d_n - d_c).abs() <= params.depth_tolerance * d_c
-                && cos_nc >= params.normal_tolerance
+            let similar = same_surface(params, d_c, n_c, depth[ix], normal[ix])
                 && (values[ix][3] - values[c_ix][3]).abs() <= params.visibility_tolerance;
             if (dx == 0 && dy == 0) || similar {
                 // Component by component, as the kernel's vec4 arithmetic.
@@ -229,6 +223,16 @@ pub fn filter_pixel(
     }
     let n = weight_sum;
     [sum[0] / n, sum[1] / n, sum[2] / n, sum[3] / n]
+}
+
+/// The filter's geometry test: a neighbour with depth `d_n` and normal `n_n`
+/// lies on the same surface as a centre with `d_c`, `n_c` when it has a hit,
+/// its depth is within `depth_tolerance · d_c` and its normal within
+/// `normal_tolerance` (a cosine) of the centre's (see [`FilterParams`]).
+pub fn same_surface(params: &FilterParams, d_c: f32, n_c: [f32; 3], d_n: f32, n_n: [f32; 3]) -> bool {
+    // Written out rather than glam's dot to fix the order of the sum (the kernel's too).
+    let cos_nc = n_n[0] * n_c[0] + n_n[1] * n_c[1] + n_n[2] * n_c[2];
+    d_n > 0.0 && (d_n - d_c).abs() <= params.depth_tolerance * d_c && cos_nc >= params.normal_tolerance
 }
 
 /// The normals as the kernel's `normal` buffer wants them: `vec4<f32>` per
