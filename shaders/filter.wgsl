@@ -1,4 +1,5 @@
-// 4×4 discontinuity filter: each pixel averages the values of the 4-pixel box centred on it, using only neighbours at a similar depth and normal.
+// 4×4 discontinuity filter: each pixel averages the values of the 4-pixel box centred on it, using only neighbours at a similar
+// depth, normal and visibility whose mirror image through the pixel is used too.
 // Dispatched by the filter pass after shading, ceil(width/8) × ceil(height/8) workgroups; its CPU twin is `penumbra::filter::filter_pixel`.
 
 // Mirrors `FilterParams` in `src/filter.rs`, 32 bytes; a naga test checks size and offsets.
@@ -37,19 +38,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let n_c = normal[c_ix].xyz;
     // Same order as the CPU twin (dy outer, dx inner, increasing), so the f32 sums match.
-    // The window is a 4-pixel box centred on the pixel: 5×5 taps, the outer
-    // ring at half weight (a quarter in the corners). Every one of the 16
-    // sample sets then has weight 1 in a full window, and a gradient across
-    // the window averages to the centre's value (an uncentred 4×4 window is
-    // half a pixel off). Weights are powers of two: every product is exact.
-    var sum = vec4<f32>(0.0);
-    var weight_sum = 0.0;
+    // First the taps the centre accepts, one bit each: bit (dy + 2) * 5 + (dx + 2).
+    var accepted = 0u;
     for (var dy = -2; dy <= 2; dy++) {
         let y = i32(gid.y) + dy;
         if y < 0 || y >= i32(params.height) {
             continue;
         }
-        let wy = select(1.0, 0.5, abs(dy) == 2);
         for (var dx = -2; dx <= 2; dx++) {
             let x = i32(gid.x) + dx;
             if x < 0 || x >= i32(params.width) {
@@ -65,10 +60,32 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
                 && abs(values[ix].w - values[c_ix].w) <= params.visibility_tolerance;
             // The centre always counts, whatever the tolerances, so weight_sum >= 1.
             if (dx == 0 && dy == 0) || similar {
-                let w = wy * select(1.0, 0.5, abs(dx) == 2);
-                sum += values[ix] * w;
-                weight_sum += w;
+                accepted |= 1u << u32((dy + 2) * 5 + dx + 2);
             }
+        }
+    }
+    // Only taps whose mirror image through the centre is accepted too: the
+    // used taps stay symmetric about the pixel where a silhouette, crease,
+    // sharp shadow edge or the image border cuts the window, so the mean is
+    // not pulled towards one side (bit k's mirror is bit 24 - k).
+    let paired = accepted & (reverseBits(accepted) >> 7u);
+    // The window is a 4-pixel box centred on the pixel: 5×5 taps, the outer
+    // ring at half weight (a quarter in the corners). Every one of the 16
+    // sample sets then has weight 1 in a full window, and a gradient across
+    // the window averages to the centre's value (an uncentred 4×4 window is
+    // half a pixel off). Weights are powers of two: every product is exact.
+    var sum = vec4<f32>(0.0);
+    var weight_sum = 0.0;
+    for (var dy = -2; dy <= 2; dy++) {
+        let wy = select(1.0, 0.5, abs(dy) == 2);
+        for (var dx = -2; dx <= 2; dx++) {
+            if (paired & (1u << u32((dy + 2) * 5 + dx + 2))) == 0u {
+                continue;
+            }
+            let ix = u32(i32(gid.y) + dy) * params.width + u32(i32(gid.x) + dx);
+            let w = wy * select(1.0, 0.5, abs(dx) == 2);
+            sum += values[ix] * w;
+            weight_sum += w;
         }
     }
     filtered[c_ix] = sum / weight_sum;
