@@ -5,6 +5,7 @@
 #import shared/descend
 #import shared/frame
 #import shared/vec16
+#import shared/bvh_vec16
 
 const STACK_SIZE: u32 = 64u;
 const MASK_FULL: u32 = 0xffffu;
@@ -48,6 +49,9 @@ const SHRINK_FLAG: u32 = 0x80000000u;
 @group(0) @binding(6) var<storage, read_write> state: array<u32>;
 // [0]: tiles suspended by this dispatch; [1..6]: counters.
 @group(0) @binding(7) var<storage, read_write> status: array<atomic<u32>>;
+// Bindings 1 and 2 again, as words: read by shared/bvh_vec16.
+@group(0) @binding(8) var<storage, read> node_words: array<u32>;
+@group(0) @binding(9) var<storage, read> triangle_words: array<u32>;
 
 // This lane's frustum.
 var<private> f_origin: vec3<f32>;
@@ -448,7 +452,7 @@ fn main(ids: Vec16Ids) {
                     node = stack_node[depth];
                     mask = m;
                     popping = 0u;
-                    let c = nodes[node];
+                    let c = load_node(node);
                     children = c.first;
                     if c.count > 0u {
                         cursor = c.first;
@@ -459,8 +463,9 @@ fn main(ids: Vec16Ids) {
         }
         if running && between_leaves && popping == 0u && cursor >= end {
             let l = children;
-            let nl = nodes[l];
-            let nr = nodes[l + 1u];
+            let pair = load_node_pair(l);
+            let nl = pair[0];
+            let nr = pair[1];
             n_nodes += 1u;
             n_boxes += 2u;
             let mine = (mask & (1u << g_lane)) != 0u && !is_done();
@@ -494,7 +499,7 @@ fn main(ids: Vec16Ids) {
             in_leaf = true;
             // With cand != 0 a resumed tile goes on with the candidates of triangle cursor - 1.
             if cand == 0u {
-                let tri = triangles[cursor];
+                let tri = load_triangle(cursor);
                 cursor += 1u;
                 n_tris += 1u;
                 let mine = (mask & (1u << g_lane)) != 0u && !is_done();
@@ -518,7 +523,7 @@ fn main(ids: Vec16Ids) {
             }
         }
         if !LEAF_TRANSPOSED && cursor < end {
-            let tri = triangles[cursor];
+            let tri = load_triangle(cursor);
             cursor += 1u;
             n_tris += 1u;
             let mine = (mask & (1u << g_lane)) != 0u && !is_done();

@@ -6,6 +6,7 @@
 #import shared/frame
 #import shared/intersect
 #import shared/vec16
+#import shared/bvh_vec16
 
 const STACK_SIZE: u32 = 64u;
 const MASK_SKY: u32 = 0x10000u;
@@ -31,6 +32,9 @@ override COUNTERS: bool = false;
 @group(0) @binding(6) var<storage, read_write> state: array<u32>;
 // [0]: pixels suspended by this dispatch; [1..6]: counters.
 @group(0) @binding(7) var<storage, read_write> status: array<atomic<u32>>;
+// Bindings 1 and 2 again, as words: read by shared/bvh_vec16.
+@group(0) @binding(8) var<storage, read> node_words: array<u32>;
+@group(0) @binding(9) var<storage, read> triangle_words: array<u32>;
 
 var<private> stack_node: array<u32, 64>;
 var<private> stack_mask: array<u32, 64>;
@@ -116,7 +120,7 @@ fn main(ids: Vec16Ids) {
         iterations += 1u;
         var enter = false;
         if cursor < end {
-            let tri = triangles[cursor];
+            let tri = load_triangle(cursor);
             cursor += 1u;
             n_tris += 1u;
             let mine = (mask & alive & (1u << g_lane)) != 0u;
@@ -142,12 +146,13 @@ fn main(ids: Vec16Ids) {
                 }
             }
         } else {
-            let l = nodes[node].first;
+            let l = load_node(node).first;
             n_nodes += 1u;
             n_boxes += 2u;
             let mine = (mask & alive & (1u << g_lane)) != 0u;
-            let ml = ballot16(mine && intersect_box(origin, inv_dir, nodes[l], params.t_max) >= 0.0);
-            let mr = ballot16(mine && intersect_box(origin, inv_dir, nodes[l + 1u], params.t_max) >= 0.0);
+            let pair = load_node_pair(l);
+            let ml = ballot16(mine && intersect_box(origin, inv_dir, pair[0], params.t_max) >= 0.0);
+            let mr = ballot16(mine && intersect_box(origin, inv_dir, pair[1], params.t_max) >= 0.0);
             // Into the child more rays want first.
             let d = descend(l, ml, mr, countOneBits(mr) > countOneBits(ml));
             if d.later_mask != 0u {
@@ -165,7 +170,7 @@ fn main(ids: Vec16Ids) {
             }
         }
         if enter {
-            let c = nodes[node];
+            let c = load_node(node);
             if c.count > 0u {
                 cursor = c.first;
                 end = c.first + c.count;

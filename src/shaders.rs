@@ -42,6 +42,10 @@ pub static SOURCES: &[(&str, &str)] = &[
     ("shadow_packet", include_str!("../shaders/shadow_packet.wgsl")),
     ("shadow_per_ray", include_str!("../shaders/shadow_per_ray.wgsl")),
     ("shared/bvh", include_str!("../shaders/shared/bvh.wgsl")),
+    (
+        "shared/bvh_vec16",
+        include_str!("../shaders/shared/bvh_vec16.wgsl"),
+    ),
     ("shared/counters", include_str!("../shaders/shared/counters.wgsl")),
     ("shared/descend", include_str!("../shaders/shared/descend.wgsl")),
     ("shared/frame", include_str!("../shaders/shared/frame.wgsl")),

@@ -32,3 +32,31 @@ fn ballot16(pred: bool) -> u32 {
 fn uniform16(value: u32) -> u32 {
     return value;
 }
+
+// Whether BVH reads go through vec16_words (shared/bvh_vec16): here, yes.
+const VEC16_LANE_WORDS: bool = true;
+
+// The 16 lanes' `word`s, in lane order, in every lane of the vector. With one
+// vector per subgroup the lane indices are constants (subgroupBroadcast), which
+// lavapipe turns into plain vector shuffles.
+fn vec16_words(word: u32) -> array<u32, 16> {
+    if VEC16_PER_WG == 1u {
+        return array<u32, 16>(
+            subgroupBroadcast(word, 0u), subgroupBroadcast(word, 1u), subgroupBroadcast(word, 2u),
+            subgroupBroadcast(word, 3u), subgroupBroadcast(word, 4u), subgroupBroadcast(word, 5u),
+            subgroupBroadcast(word, 6u), subgroupBroadcast(word, 7u), subgroupBroadcast(word, 8u),
+            subgroupBroadcast(word, 9u), subgroupBroadcast(word, 10u), subgroupBroadcast(word, 11u),
+            subgroupBroadcast(word, 12u), subgroupBroadcast(word, 13u), subgroupBroadcast(word, 14u),
+            subgroupBroadcast(word, 15u),
+        );
+    }
+    let b = g_sid & ~15u;
+    return array<u32, 16>(
+        subgroupShuffle(word, b), subgroupShuffle(word, b | 1u), subgroupShuffle(word, b | 2u),
+        subgroupShuffle(word, b | 3u), subgroupShuffle(word, b | 4u), subgroupShuffle(word, b | 5u),
+        subgroupShuffle(word, b | 6u), subgroupShuffle(word, b | 7u), subgroupShuffle(word, b | 8u),
+        subgroupShuffle(word, b | 9u), subgroupShuffle(word, b | 10u), subgroupShuffle(word, b | 11u),
+        subgroupShuffle(word, b | 12u), subgroupShuffle(word, b | 13u), subgroupShuffle(word, b | 14u),
+        subgroupShuffle(word, b | 15u),
+    );
+}

@@ -39,3 +39,17 @@ fn uniform16(value: u32) -> u32 {
     }
     return workgroupUniformLoad(&sh_word);
 }
+
+// Whether BVH reads go through vec16_words (shared/bvh_vec16): not here. Reading
+// the words back from workgroup memory costs a barrier and, on lavapipe, the
+// same per-lane loads that it would save, so the kernels load nodes and
+// triangles directly.
+const VEC16_LANE_WORDS: bool = false;
+
+var<workgroup> sh_words: array<u32, 16>;
+
+// The 16 lanes' `word`s, in lane order, in every lane (uniform).
+fn vec16_words(word: u32) -> array<u32, 16> {
+    sh_words[g_lane] = word;
+    return workgroupUniformLoad(&sh_words);
+}
