@@ -8,6 +8,7 @@
 #import shared/intersect
 #import shared/primary
 #import shared/vec16
+#import shared/bvh_vec16
 
 // Lane i owns frustum i: the 16 pixels (x0 + k % 4, y0 + k / 4), k = 0..16, with
 // x0 = 16 bx + 4 (i % 4), y0 = 16 by + 4 (i / 4). Its rays share the eye, so its
@@ -27,6 +28,10 @@
 // Ties: each ray keeps the first hit with a strictly smaller t, as the
 // per-ray kernel does; the traversal order differs, so where two triangles
 // give one ray exactly the same t the two kernels may keep different ones.
+
+// Bindings 1 and 2 of shared/primary again, as words: read by shared/bvh_vec16.
+@group(0) @binding(9) var<storage, read> node_words: array<u32>;
+@group(0) @binding(10) var<storage, read> triangle_words: array<u32>;
 
 const STACK_SIZE: u32 = 64u;
 const DEPTH_SLACK: f32 = 1.001;
@@ -249,7 +254,7 @@ fn main(ids: Vec16Ids) {
         }
         var enter = false;
         if cursor < end {
-            let tri = triangles[cursor];
+            let tri = load_triangle(cursor);
             var tested = false;
             if (mask & (1u << g_lane)) != 0u && !frustum_culls_triangle(tri) {
                 tested = true;
@@ -283,9 +288,10 @@ fn main(ids: Vec16Ids) {
         } else {
             n_steps += 1u;
             n_box_tests += 2u;
-            let l = nodes[node].first;
-            let left = nodes[l];
-            let right = nodes[l + 1u];
+            let l = load_node(node).first;
+            let pair = load_node_pair(l);
+            let left = pair[0];
+            let right = pair[1];
             let dl = box_depth(left);
             let dr = box_depth(right);
             let mine = (mask & (1u << g_lane)) != 0u;
@@ -310,7 +316,7 @@ fn main(ids: Vec16Ids) {
             }
         }
         if enter {
-            let c = nodes[node];
+            let c = load_node(node);
             if c.count > 0u {
                 cursor = c.first;
                 end = c.first + c.count;

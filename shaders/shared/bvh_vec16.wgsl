@@ -1,4 +1,4 @@
-// BVH reads of the 16-wide kernels (shadow_mft, shadow_packet), where every lane of a
+// BVH reads of the 16-wide kernels (shadow_mft, shadow_packet, primary_mft), where every lane of a
 // vector reads the same node or triangle. The kernel declares `nodes` and `triangles`,
 // and `node_words` and `triangle_words`: the same two buffers as arrays of u32.
 //

@@ -125,6 +125,9 @@ impl PrimaryPass {
             aliases,
             &[
                 Uniform, ReadOnly, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadWrite, ReadOnly, ReadOnly,
+                // 9, 10: nodes and triangles again, as words (shaders/shared/bvh_vec16.wgsl);
+                // the per-ray kernel does not declare them.
+                ReadOnly, ReadOnly,
             ],
             &constants,
             // Indices: BVH ranges validated by GpuScene::new, stack indices clamped,
@@ -215,6 +218,8 @@ impl PrimaryPass {
                 status,
                 &scene.textures,
                 &scene.texels,
+                &scene.nodes,
+                &scene.triangles,
             ],
         );
         self.kernel
