@@ -7,6 +7,14 @@
 #import shared/intersect
 #import shared/primary
 
+@group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
+@group(0) @binding(2) var<storage, read> triangles: array<BvhTriangle>;
+
+// The triangle a ray hit, for shared/primary's texel.
+fn hit_triangle(t: u32) -> BvhTriangle {
+    return triangles[t];
+}
+
 // Pushes both children of a node: the stack holds at most depth + 1 entries.
 const STACK_SIZE: u32 = 64u;
 

@@ -29,9 +29,14 @@
 // per-ray kernel does; the traversal order differs, so where two triangles
 // give one ray exactly the same t the two kernels may keep different ones.
 
-// Bindings 1 and 2 of shared/primary again, as words: read by shared/bvh_vec16.
-@group(0) @binding(9) var<storage, read> node_words: array<u32>;
-@group(0) @binding(10) var<storage, read> triangle_words: array<u32>;
+// Bindings 1 and 2 of the primary pass (shared/primary), as words: read by shared/bvh_vec16.
+@group(0) @binding(1) var<storage, read> node_words: array<u32>;
+@group(0) @binding(2) var<storage, read> triangle_words: array<u32>;
+
+// The triangle a lane's ray hit, for shared/primary's texel (lanes differ).
+fn hit_triangle(t: u32) -> BvhTriangle {
+    return triangle_from_memory(t);
+}
 
 const STACK_SIZE: u32 = 64u;
 const DEPTH_SLACK: f32 = 1.001;
@@ -231,7 +236,7 @@ fn main(ids: Vec16Ids) {
     var n_after_culling = 0u;
     var n_triangle_tests = 0u;
 
-    let root = nodes[0];
+    let root = load_node(0u);
     mask = ballot16(inside != 0u && frustum_may_hit_box(root, box_depth(root)));
     var running = mask != 0u;
     if root.count > 0u {

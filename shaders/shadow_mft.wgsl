@@ -41,17 +41,15 @@ const SHRINK_MARGIN: f32 = 0.0009765625;  // 1/1024 of a light edge
 const SHRINK_FLAG: u32 = 0x80000000u;
 
 @group(0) @binding(0) var<uniform> params: ShadowParams;
-@group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
-@group(0) @binding(2) var<storage, read> triangles: array<BvhTriangle>;
+// The BVH as 32-bit words (shared/bvh layouts), read through shared/bvh_vec16.
+@group(0) @binding(1) var<storage, read> node_words: array<u32>;
+@group(0) @binding(2) var<storage, read> triangle_words: array<u32>;
 @group(0) @binding(3) var<storage, read> gbuffer: array<GBufferTexel>;
 @group(0) @binding(4) var<storage, read> light_points: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> masks: array<u32>;
 @group(0) @binding(6) var<storage, read_write> state: array<u32>;
 // [0]: tiles suspended by this dispatch; [1..6]: counters.
 @group(0) @binding(7) var<storage, read_write> status: array<atomic<u32>>;
-// Bindings 1 and 2 again, as words: read by shared/bvh_vec16.
-@group(0) @binding(8) var<storage, read> node_words: array<u32>;
-@group(0) @binding(9) var<storage, read> triangle_words: array<u32>;
 
 // This lane's frustum.
 var<private> f_origin: vec3<f32>;
@@ -395,10 +393,10 @@ fn main(ids: Vec16Ids) {
         alive = uniform16(state[base + 5u]);
         depth = uniform16(state[base + 6u]);
         popping = uniform16(state[base + 7u]);
-        children = nodes[node].first;
+        children = load_node(node).first;
         cand = uniform16(state[base + ST_CAND]);
         if cand != 0u {
-            cand_tri = triangles[cursor - 1u];
+            cand_tri = load_triangle(cursor - 1u);
         }
         f_occluded = state[base + ST_LANES + g_lane];
         let shrunk_for = state[base + ST_SHRUNK + g_lane];
@@ -411,7 +409,7 @@ fn main(ids: Vec16Ids) {
         }
     } else {
         alive = ballot16(!is_done());
-        let root = nodes[0];
+        let root = load_node(0u);
         mask = ballot16(!is_done() && frustum_may_hit_box(root));
         n_boxes = 1u;
         running = mask != 0u;

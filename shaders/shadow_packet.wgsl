@@ -24,17 +24,15 @@ const STATUS_SUSPENDED: u32 = 1u;
 override COUNTERS: bool = false;
 
 @group(0) @binding(0) var<uniform> params: ShadowParams;
-@group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
-@group(0) @binding(2) var<storage, read> triangles: array<BvhTriangle>;
+// The BVH as 32-bit words (shared/bvh layouts), read through shared/bvh_vec16.
+@group(0) @binding(1) var<storage, read> node_words: array<u32>;
+@group(0) @binding(2) var<storage, read> triangle_words: array<u32>;
 @group(0) @binding(3) var<storage, read> gbuffer: array<GBufferTexel>;
 @group(0) @binding(4) var<storage, read> light_points: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> masks: array<u32>;
 @group(0) @binding(6) var<storage, read_write> state: array<u32>;
 // [0]: pixels suspended by this dispatch; [1..6]: counters.
 @group(0) @binding(7) var<storage, read_write> status: array<atomic<u32>>;
-// Bindings 1 and 2 again, as words: read by shared/bvh_vec16.
-@group(0) @binding(8) var<storage, read> node_words: array<u32>;
-@group(0) @binding(9) var<storage, read> triangle_words: array<u32>;
 
 var<private> stack_node: array<u32, 64>;
 var<private> stack_mask: array<u32, 64>;
@@ -95,7 +93,7 @@ fn main(ids: Vec16Ids) {
         }
     } else {
         alive = ballot16(!blocked);
-        let root = nodes[0];
+        let root = load_node(0u);
         mask = ballot16(!blocked && intersect_box(origin, inv_dir, root, params.t_max) >= 0.0);
         n_boxes = 1u;
         running = mask != 0u;

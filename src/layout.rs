@@ -350,6 +350,28 @@ mod tests {
         );
     }
 
+    /// The 16-wide kernels read nodes and triangles as u32 words
+    /// (shaders/shared/bvh_vec16.wgsl); their word counts are the structs' sizes.
+    #[test]
+    fn bvh_word_counts_match_the_structs() {
+        let wgsl =
+            crate::shaders::assemble("shadow_mft", &[("shared/vec16", "shared/vec16_subgroup")]).unwrap();
+        let module = naga::front::wgsl::parse_str(&wgsl).unwrap();
+        let constant = |name: &str| -> usize {
+            let (_, c) = module
+                .constants
+                .iter()
+                .find(|(_, c)| c.name.as_deref() == Some(name))
+                .unwrap_or_else(|| panic!("no constant {name}"));
+            match module.global_expressions[c.init] {
+                naga::Expression::Literal(naga::Literal::U32(v)) => v as usize,
+                ref other => panic!("{name} = {other:?}"),
+            }
+        };
+        assert_eq!(constant("NODE_WORDS") * 4, size_of::<BvhNode>());
+        assert_eq!(constant("TRIANGLE_WORDS") * 4, size_of::<BvhTriangle>());
+    }
+
     #[test]
     fn bvh_triangle_layout_matches_wgsl() {
         check(

@@ -21,3 +21,24 @@ struct BvhTriangle {
     e2: vec3<f32>,         // bytes 32..44: corner 2 - corner 0
     pad2: u32,             // bytes 44..48: unused
 }
+
+// A node and a triangle from their 32-bit words, in the layouts above: the
+// kernels that bind `nodes` and `triangles` as arrays of u32 (shared/bvh_vec16)
+// build them so.
+fn node_of_words(w0: u32, w1: u32, w2: u32, w3: u32, w4: u32, w5: u32, w6: u32, w7: u32) -> BvhNode {
+    return BvhNode(
+        vec3<f32>(bitcast<f32>(w0), bitcast<f32>(w1), bitcast<f32>(w2)), w3,
+        vec3<f32>(bitcast<f32>(w4), bitcast<f32>(w5), bitcast<f32>(w6)), w7,
+    );
+}
+
+fn triangle_of_words(
+    w0: u32, w1: u32, w2: u32, w3: u32, w4: u32, w5: u32,
+    w6: u32, w7: u32, w8: u32, w9: u32, w10: u32, w11: u32,
+) -> BvhTriangle {
+    return BvhTriangle(
+        vec3<f32>(bitcast<f32>(w0), bitcast<f32>(w1), bitcast<f32>(w2)), w3,
+        vec3<f32>(bitcast<f32>(w4), bitcast<f32>(w5), bitcast<f32>(w6)), w7,
+        vec3<f32>(bitcast<f32>(w8), bitcast<f32>(w9), bitcast<f32>(w10)), w11,
+    );
+}

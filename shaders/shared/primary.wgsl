@@ -2,8 +2,8 @@
 // Imported by shaders/primary.wgsl (per-ray) and shaders/primary_mft.wgsl, so both bind alike and write alike.
 
 @group(0) @binding(0) var<uniform> camera: CameraParams;
-@group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
-@group(0) @binding(2) var<storage, read> triangles: array<BvhTriangle>;
+// Bindings 1 (BVH nodes) and 2 (BVH triangles) are declared by each kernel, which also
+// gives `hit_triangle(t)`: primary.wgsl as structs, primary_mft.wgsl as words.
 @group(0) @binding(3) var<storage, read> shading: array<ShadingTriangle>;
 @group(0) @binding(4) var<storage, read> materials: array<GpuMaterial>;
 @group(0) @binding(5) var<storage, read_write> gbuffer: array<GBufferTexel>;
@@ -44,7 +44,7 @@ fn gbuffer_texel(best_tri: u32, best: vec3<f32>, dir: vec3<f32>) -> GBufferTexel
     var texel: GBufferTexel;
     texel.triangle = 0xffffffffu;
     if best_tri != 0xffffffffu {
-        let tri = triangles[best_tri];
+        let tri = hit_triangle(best_tri);
         let sh = shading[best_tri];
         var geo = normalize(cross(tri.e1, tri.e2));
         let w = 1.0 - best.y - best.z;

@@ -125,9 +125,6 @@ impl PrimaryPass {
             aliases,
             &[
                 Uniform, ReadOnly, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadWrite, ReadOnly, ReadOnly,
-                // 9, 10: nodes and triangles again, as words (shaders/shared/bvh_vec16.wgsl);
-                // the per-ray kernel does not declare them.
-                ReadOnly, ReadOnly,
             ],
             &constants,
             // Indices: BVH ranges validated by GpuScene::new, stack indices clamped,
@@ -218,8 +215,6 @@ impl PrimaryPass {
                 status,
                 &scene.textures,
                 &scene.texels,
-                &scene.nodes,
-                &scene.triangles,
             ],
         );
         self.kernel

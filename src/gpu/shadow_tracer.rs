@@ -239,9 +239,6 @@ impl ShadowTracer {
             aliases,
             &[
                 Uniform, ReadOnly, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadWrite, ReadWrite,
-                // 8, 9: nodes and triangles again, as words (shaders/shared/bvh_vec16.wgsl);
-                // the per-ray kernel does not declare them.
-                ReadOnly, ReadOnly,
             ],
             &constants,
             // Indices: BVH ranges validated by GpuScene::new, stack indices clamped,
@@ -348,8 +345,6 @@ impl ShadowTracer {
                 masks,
                 &state,
                 &status,
-                &scene.nodes,
-                &scene.triangles,
             ],
         );
         if !self.tracer.uses_vector() {
@@ -445,8 +440,6 @@ impl ShadowTracer {
                         masks,
                         &scratch.state,
                         &scratch.status,
-                        &scene.nodes,
-                        &scene.triangles,
                     ],
                 );
                 self.kernel.record(encoder, "shadow/trace", &bind, None, groups);
