@@ -224,6 +224,7 @@ fn main(ids: Vec16Ids) {
 
     // The traversal state; every lane holds the same values.
     var node = 0u;        // inner node to visit next (when not in a leaf)
+    var children = 0u;    // its first child, read when entering it
     var mask = 0u;        // frusta that entered `node`
     var cursor = 0u;      // next triangle of the current leaf
     var end = 0u;         // end of the current leaf's triangles
@@ -237,6 +238,7 @@ fn main(ids: Vec16Ids) {
     var n_triangle_tests = 0u;
 
     let root = load_node(0u);
+    children = root.first;
     mask = ballot16(inside != 0u && frustum_may_hit_box(root, box_depth(root)));
     var running = mask != 0u;
     if root.count > 0u {
@@ -293,7 +295,7 @@ fn main(ids: Vec16Ids) {
         } else {
             n_steps += 1u;
             n_box_tests += 2u;
-            let l = load_node(node).first;
+            let l = children;
             let pair = load_node_pair(l);
             let left = pair[0];
             let right = pair[1];
@@ -322,6 +324,7 @@ fn main(ids: Vec16Ids) {
         }
         if enter {
             let c = load_node(node);
+            children = c.first;
             if c.count > 0u {
                 cursor = c.first;
                 end = c.first + c.count;

@@ -68,6 +68,7 @@ fn main(ids: Vec16Ids) {
     var blocked = dot(params.light_normal, origin - c0) <= 0.0 || dot(texel.geo_normal, dir) <= 0.0;
 
     var node = 0u;
+    var children = 0u;  // the first child of `node` (when it is an inner node), read when entering it
     var mask = 0u;
     var cursor = 0u;
     var end = 0u;
@@ -80,6 +81,7 @@ fn main(ids: Vec16Ids) {
     var n_tris = 0u;
     if params.resume != 0u {
         node = uniform16(state[base + 1u]);
+        children = load_node(node).first;
         mask = uniform16(state[base + 2u]);
         cursor = uniform16(state[base + 3u]);
         end = uniform16(state[base + 4u]);
@@ -94,6 +96,7 @@ fn main(ids: Vec16Ids) {
     } else {
         alive = ballot16(!blocked);
         let root = load_node(0u);
+        children = root.first;
         mask = ballot16(!blocked && intersect_box(origin, inv_dir, root, params.t_max) >= 0.0);
         n_boxes = 1u;
         running = mask != 0u;
@@ -144,7 +147,7 @@ fn main(ids: Vec16Ids) {
                 }
             }
         } else {
-            let l = load_node(node).first;
+            let l = children;
             n_nodes += 1u;
             n_boxes += 2u;
             let mine = (mask & alive & (1u << g_lane)) != 0u;
@@ -169,6 +172,7 @@ fn main(ids: Vec16Ids) {
         }
         if enter {
             let c = load_node(node);
+            children = c.first;
             if c.count > 0u {
                 cursor = c.first;
                 end = c.first + c.count;
