@@ -13,7 +13,10 @@ use glam::Vec3;
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::counters::Counters;
 use penumbra::frame::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
-use penumbra::gpu::{GpuScene, PrimaryPass, PrimaryTracer, VectorVariant, empty_storage_buffer, read_buffer};
+use penumbra::gpu::{
+    FrameSettings, GpuScene, PrimaryPass, PrimaryTracer, Renderer, RendererOptions, VectorVariant,
+    empty_storage_buffer, read_buffer,
+};
 use penumbra::layout::{CameraParams, GBufferTexel};
 use penumbra::reference::primary::primary_gbuffer_counted;
 use penumbra::reference::primary_mft::{ITERATION_BUDGET, primary_mft_gbuffer};
@@ -426,4 +429,69 @@ fn running_out_of_iterations_is_an_error() {
         PrimaryPass::with_iteration_budget(ctx(), PrimaryTracer::Mft, None, false, 70_000).is_err(),
         "a budget past lavapipe's loop limit is refused"
     );
+}
+
+/// A renderer whose multi-frusta primary vectors run out of loop iterations does not
+/// fail: the per-ray kernel traces the frame's camera rays again, so the frame is the
+/// per-ray renderer's, bit for bit, and says how many pixels ran out (as the CPU twin
+/// counts them). Small images of big scenes do this with the full budget (an 8×8
+/// image of Sponza: each lane's frustum spans a quarter of the view).
+#[test]
+fn a_renderer_falls_back_to_per_ray_when_a_vector_runs_out() {
+    let (scene, view) = embedded("playground");
+    let (w, h) = (37, 23);
+    let case = Case::new("playground", scene, &view.camera, &BvhSettings::default(), (w, h));
+    let shading = case.shading();
+    let (budget, twin) = [5, 10, 20, 40, 80, 160, 320]
+        .into_iter()
+        .map(|b| (b, primary_mft_gbuffer(&case.bvh, &shading, &case.cam, b)))
+        .find(|(_, t)| t.overflow_pixels > 0 && t.overflow_pixels < u64::from(w * h))
+        .expect("a budget that stops some vectors but not all");
+    let gpu_scene = GpuScene::new(ctx(), &case.scene, &case.bvh).unwrap();
+    let mut settings = FrameSettings::new(w, h);
+    settings.keep_gbuffer = true;
+    for v in variants() {
+        let render = |primary, primary_iteration_budget| {
+            let options = RendererOptions {
+                variant: Some(v),
+                primary,
+                primary_iteration_budget,
+                ..RendererOptions::default()
+            };
+            Renderer::new(ctx(), options)
+                .unwrap()
+                .render(ctx(), &gpu_scene, &view, &settings)
+                .unwrap()
+        };
+        let per_ray = render(PrimaryTracer::PerRay, ITERATION_BUDGET);
+        let fallback = render(PrimaryTracer::Mft, budget);
+        let mft = render(PrimaryTracer::Mft, ITERATION_BUDGET);
+        assert_eq!(
+            u64::from(fallback.primary_fallback_pixels),
+            twin.overflow_pixels,
+            "{v}: pixels that ran out, GPU vs CPU twin"
+        );
+        assert_eq!(per_ray.primary_fallback_pixels, 0, "{v}");
+        assert_eq!(mft.primary_fallback_pixels, 0, "{v}");
+        assert_eq!(
+            fallback.gbuffer, per_ray.gbuffer,
+            "{v}: fallback G-buffer vs per-ray"
+        );
+        assert_eq!(fallback.masks, per_ray.masks, "{v}: fallback masks vs per-ray");
+        let primary_dispatches =
+            |f: &penumbra::gpu::Frame| f.timings.iter().filter(|(n, _)| n == "primary").count();
+        if !per_ray.timings.is_empty() {
+            assert_eq!(primary_dispatches(&per_ray), 1, "{v}");
+            assert_eq!(
+                primary_dispatches(&fallback),
+                2,
+                "{v}: both primary dispatches are timed"
+            );
+        }
+        eprintln!(
+            "{v}: budget {budget}: {} of {} pixels ran out; per-ray fallback = per-ray frame",
+            fallback.primary_fallback_pixels,
+            w * h
+        );
+    }
 }

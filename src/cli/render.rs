@@ -250,6 +250,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             counters: false,
             shrink: !args.no_shrink,
             primary: args.primary.into(),
+            ..RendererOptions::default()
         },
     )?;
     if tracer.uses_vector() {
@@ -308,6 +309,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         "frame     {wall:.2} s wall (with readback); {} shadow dispatches, {} tile suspensions",
         frame.shadow_stats.dispatches, frame.shadow_stats.suspensions
     );
+    if frame.primary_fallback_pixels > 0 {
+        println!(
+            "note      the primary frusta of {} pixels ran out of loop iterations; the per-ray \
+             kernel traced the camera rays instead (its time is in the primary line)",
+            frame.primary_fallback_pixels
+        );
+    }
 
     let image = HdrImage {
         width,

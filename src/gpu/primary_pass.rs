@@ -6,9 +6,11 @@
 //! Either kernel counts its loop iterations and stops a ray (per-ray) or a
 //! vector (multi-frusta) before lavapipe's loop limit would cut it silently;
 //! it then adds its pixels to status word 0 and the pass returns an error.
-//! For primary rays that takes a pathological scene (the whole block's rays
-//! crossing tens of thousands of boxes), so the pass reports it rather than
-//! suspending and resuming as the shadow pass does.
+//! For primary rays that takes a big scene seen through wide frusta (the whole
+//! block's rays crossing tens of thousands of boxes: an 8×8 image of Sponza), so
+//! the pass reports it rather than suspending and resuming as the shadow pass
+//! does, and the [`Renderer`](super::Renderer) then traces the frame's camera
+//! rays again with the per-ray kernel, whose loop bound is per ray.
 
 use super::kernel::{Binding, Checks, Kernel, uniform_buffer};
 use super::{GpuContext, GpuScene, GpuTimer, VectorVariant, read_buffer};
@@ -244,6 +246,19 @@ impl PrimaryPass {
         gbuffer: &wgpu::Buffer,
         timer: Option<&mut GpuTimer>,
     ) -> Result<Option<Counters>> {
+        self.run_with_status(ctx, scene, camera, gbuffer, timer)?.check()
+    }
+
+    /// [`PrimaryPass::run`], returning the status as it is: rays that ran out of loop
+    /// iterations are counted in it, not an error.
+    pub fn run_with_status(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        camera: &CameraParams,
+        gbuffer: &wgpu::Buffer,
+        timer: Option<&mut GpuTimer>,
+    ) -> Result<PrimaryStatus> {
         let pixels = u64::from(camera.width) * u64::from(camera.height);
         if pixels == 0 || gbuffer.size() < pixels * size_of::<crate::layout::GBufferTexel>() as u64 {
             return Err(Error::Gpu(format!(
@@ -274,6 +289,6 @@ impl PrimaryPass {
             t.resolve(&mut encoder);
         }
         ctx.queue.submit([encoder.finish()]);
-        self.read_status(ctx, &status)?.check()
+        self.read_status(ctx, &status)
     }
 }

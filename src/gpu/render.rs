@@ -10,6 +10,7 @@ use super::{GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer, s
 use crate::filter::FilterParams;
 use crate::frame::{RAY_OFFSET_FRACTION, camera_params, tile_camera};
 use crate::layout::{CameraParams, GBufferTexel};
+use crate::reference::primary_mft::ITERATION_BUDGET;
 use crate::reference::shade::shade_params;
 use crate::reference::shadow::shadow_params;
 use crate::sampling;
@@ -75,6 +76,9 @@ pub struct Frame {
     /// Work counted by the primary kernel (zero unless built with
     /// [`RendererOptions::counters`]).
     pub primary_counters: crate::counters::Counters,
+    /// Pixels whose multi-frusta primary vectors ran out of loop iterations, after which
+    /// the per-ray kernel traced the frame's camera rays again (0: it did not happen).
+    pub primary_fallback_pixels: u32,
 }
 
 impl Frame {
@@ -113,6 +117,9 @@ pub struct RendererOptions {
     pub shrink: bool,
     /// Which kernel traces the camera rays.
     pub primary: PrimaryTracer,
+    /// Loop iterations a multi-frusta primary vector may run (1..=60,000, the default);
+    /// a frame where one runs out is traced again by the per-ray kernel (tests lower it).
+    pub primary_iteration_budget: u32,
 }
 
 impl Default for RendererOptions {
@@ -125,6 +132,7 @@ impl Default for RendererOptions {
             counters: t.counters,
             shrink: t.shrink,
             primary: PrimaryTracer::default(),
+            primary_iteration_budget: ITERATION_BUDGET,
         }
     }
 }
@@ -144,6 +152,9 @@ impl From<Option<VectorVariant>> for RendererOptions {
 #[derive(Debug)]
 pub struct Renderer {
     primary: PrimaryPass,
+    /// The per-ray kernel that traces a frame again when a multi-frusta primary vector ran
+    /// out of loop iterations (`None` when `primary` is per-ray already).
+    primary_fallback: Option<PrimaryPass>,
     shadow: ShadowTracer,
     shade: Kernel,
     filter: Kernel,
@@ -156,7 +167,25 @@ impl Renderer {
         let options = options.into();
         use Binding::*;
         Ok(Renderer {
-            primary: PrimaryPass::new(ctx, options.primary, options.variant, options.counters)?,
+            primary: PrimaryPass::with_iteration_budget(
+                ctx,
+                options.primary,
+                options.variant,
+                options.counters,
+                match options.primary {
+                    PrimaryTracer::Mft => options.primary_iteration_budget,
+                    PrimaryTracer::PerRay => ITERATION_BUDGET,
+                },
+            )?,
+            primary_fallback: match options.primary {
+                PrimaryTracer::Mft => Some(PrimaryPass::new(
+                    ctx,
+                    PrimaryTracer::PerRay,
+                    None,
+                    options.counters,
+                )?),
+                PrimaryTracer::PerRay => None,
+            },
             shadow: ShadowTracer::with_options(
                 ctx,
                 &TracerOptions {
@@ -326,11 +355,33 @@ impl Renderer {
             writes,
         );
         ctx.queue.submit([encoder.finish()]);
-        let primary_counters = self
-            .primary
-            .read_status(ctx, &status)?
-            .check()?
-            .unwrap_or_default();
+        let mut primary_status = self.primary.read_status(ctx, &status)?;
+        let mut primary_fallback_pixels = 0;
+        if let Some(fallback) = self
+            .primary_fallback
+            .as_ref()
+            .filter(|_| primary_status.overflow_pixels > 0)
+        {
+            // Frusta as wide as a small image's blocks can meet most of a big scene; the
+            // per-ray kernel's loop bound is per ray, so it still traces them.
+            primary_fallback_pixels = primary_status.overflow_pixels;
+            let mut encoder = ctx.device.create_command_encoder(&Default::default());
+            let writes = timer.pass_writes("primary");
+            let groups = fallback.workgroups(ctx, w, h)?;
+            fallback.record(
+                &ctx.device,
+                &mut encoder,
+                scene,
+                &camera_buf,
+                &gbuffer,
+                &status,
+                groups,
+                writes,
+            );
+            ctx.queue.submit([encoder.finish()]);
+            primary_status = fallback.read_status(ctx, &status)?;
+        }
+        let primary_counters = primary_status.check()?.unwrap_or_default();
 
         let shadow_stats = self.shadow.run(
             ctx,
@@ -390,6 +441,7 @@ impl Renderer {
             timings: timer.read(ctx)?,
             shadow_stats,
             primary_counters,
+            primary_fallback_pixels,
         })
     }
 }
@@ -457,6 +509,7 @@ impl Frame {
             timings: Vec::new(),
             shadow_stats: ShadowStats::default(),
             primary_counters: crate::counters::Counters::default(),
+            primary_fallback_pixels: 0,
         }
     }
 
@@ -481,6 +534,7 @@ impl Frame {
         self.shadow_stats.suspensions += tile.shadow_stats.suspensions;
         self.shadow_stats.counters += tile.shadow_stats.counters;
         self.primary_counters += tile.primary_counters;
+        self.primary_fallback_pixels += tile.primary_fallback_pixels;
     }
 }
 
