@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use super::kernel::{Binding, Checks, Kernel, uniform_buffer};
-use super::primary_pass::{PrimaryPass, PrimaryTracer};
+use super::primary_pass::{PrimaryPass, PrimaryStatus, PrimaryTracer};
 use super::shadow_tracer::{LeafMode, ShadowStats, ShadowTracer, Tracer, TracerOptions, VectorVariant};
 use super::{GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer, storage_buffer};
 use crate::filter::FilterParams;
@@ -341,34 +341,12 @@ impl Renderer {
         let groups = (w.div_ceil(8), h.div_ceil(8));
         check_groups(ctx, groups)?;
 
-        let primary_groups = self.primary.workgroups(ctx, w, h)?;
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        let writes = timer.pass_writes("primary");
-        self.primary.record(
-            &ctx.device,
-            &mut encoder,
-            scene,
-            &camera_buf,
-            &gbuffer,
-            &status,
-            primary_groups,
-            writes,
-        );
-        ctx.queue.submit([encoder.finish()]);
-        let mut primary_status = self.primary.read_status(ctx, &status)?;
-        let mut primary_fallback_pixels = 0;
-        if let Some(fallback) = self
-            .primary_fallback
-            .as_ref()
-            .filter(|_| primary_status.overflow_pixels > 0)
-        {
-            // Frusta as wide as a small image's blocks can meet most of a big scene; the
-            // per-ray kernel's loop bound is per ray, so it still traces them.
-            primary_fallback_pixels = primary_status.overflow_pixels;
+        // One primary dispatch, timed as "primary", waited for.
+        let mut trace_primary = |pass: &PrimaryPass| -> Result<PrimaryStatus> {
+            let groups = pass.workgroups(ctx, w, h)?;
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             let writes = timer.pass_writes("primary");
-            let groups = fallback.workgroups(ctx, w, h)?;
-            fallback.record(
+            pass.record(
                 &ctx.device,
                 &mut encoder,
                 scene,
@@ -379,7 +357,19 @@ impl Renderer {
                 writes,
             );
             ctx.queue.submit([encoder.finish()]);
-            primary_status = fallback.read_status(ctx, &status)?;
+            pass.read_status(ctx, &status)
+        };
+        let mut primary_status = trace_primary(&self.primary)?;
+        let mut primary_fallback_pixels = 0;
+        if let Some(fallback) = self
+            .primary_fallback
+            .as_ref()
+            .filter(|_| primary_status.overflow_pixels > 0)
+        {
+            // Frusta as wide as a small image's blocks can meet most of a big scene; the
+            // per-ray kernel's loop bound is per ray, so it still traces them.
+            primary_fallback_pixels = primary_status.overflow_pixels;
+            primary_status = trace_primary(fallback)?;
         }
         let primary_counters = primary_status.check()?.unwrap_or_default();
 
