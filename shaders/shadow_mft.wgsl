@@ -11,9 +11,10 @@ const STACK_SIZE: u32 = 64u;
 const MASK_FULL: u32 = 0xffffu;
 const MASK_SKY: u32 = 0x10000u;
 // Suspended-state slot of a tile: status, node, mask, cursor, end, alive,
-// stack depth, popping, 16 lane masks, 64 stack nodes, 64 stack masks,
-// the candidate frusta of a transposed leaf (`cand`), 7 words unused, and
-// 16 lane words of `f_shrunk_for`.
+// stack depth, popping (| 2: traversal done), 16 lane masks, 64 stack nodes,
+// 64 stack masks, the candidate frusta of a transposed leaf (`cand`), the
+// current leaf's frusta, the pending leaf (first, end, frusta), 3 words
+// unused, and 16 lane words of `f_shrunk_for`.
 const STATE_WORDS: u32 = 176u;
 const ST_SHRUNK: u32 = 160u;
 const ST_STATUS: u32 = 0u;
@@ -21,6 +22,8 @@ const ST_LANES: u32 = 8u;
 const ST_STACK_NODE: u32 = 24u;
 const ST_STACK_MASK: u32 = 88u;
 const ST_CAND: u32 = 152u;
+const ST_LEAF_MASK: u32 = 153u;
+const ST_PENDING: u32 = 154u;
 const STATUS_SUSPENDED: u32 = 1u;
 
 // How a leaf triangle spends the 16 lanes (LeafMode in src/gpu/shadow_pass.rs).
@@ -68,6 +71,27 @@ var<private> f_initial: u32;
 // The vector's traversal stack (the same in every lane).
 var<private> stack_node: array<u32, 64>;
 var<private> stack_mask: array<u32, 64>;
+
+// Traversal and leaves are two stages with one leaf between them: the
+// traversal walks on to the next leaf (`p_*`) while the leaf stage tests the
+// current one, so that one pass of the loop can do work in both. Every lane
+// holds the same values. Twin: reference::mft::VectorState.
+var<private> t_node: u32;      // inner node to visit next (when not popping)
+var<private> t_mask: u32;      // frusta that entered `t_node`
+var<private> t_children: u32;  // the first child of `t_node`
+var<private> t_depth: u32;     // stack depth
+var<private> t_popping: bool;  // the next traversal step pops the stack
+var<private> t_done: bool;     // the stack ran empty: every leaf was found
+var<private> alive: u32;       // frusta not yet done
+var<private> p_first: u32;     // the pending leaf's triangles, first ..
+var<private> p_end: u32;       // .. end; 0: no leaf pending
+var<private> p_mask: u32;      // frusta that entered the pending leaf
+var<private> cursor: u32;      // next triangle of the current leaf
+var<private> end: u32;         // end of the current leaf's triangles
+var<private> leaf_mask: u32;   // frusta that entered the current leaf
+var<private> cand: u32;        // transposed leaves: frusta still to test against triangle cursor - 1
+var<private> n_nodes: u32;     // counters (COUNTERS)
+var<private> n_boxes: u32;
 
 // Transposed leaves: every lane's ray origin, 16 per vector of the workgroup,
 // so that any lane can build the rays of any frustum of its vector.
@@ -341,6 +365,78 @@ fn transposed_ray_hits(tri: BvhTriangle, f: u32) -> bool {
     return w.d != 0.0 && st_hit(edge_functions(w, o), point_st(light_points[f * 16u + g_lane].xyz, light_frame()));
 }
 
+// Moves the traversal to node `n` (first child or triangle `first`, `count`
+// triangles) with frusta `m`; a leaf waits for the leaf stage and the
+// traversal goes on from the stack.
+fn enter(n: u32, m: u32, first: u32, count: u32) {
+    t_node = n;
+    t_mask = m;
+    if count > 0u {
+        p_first = first;
+        p_end = first + count;
+        p_mask = m;
+        t_popping = true;
+    } else {
+        t_children = first;
+    }
+}
+
+// One step of the traversal stage, unless a found leaf waits or it is done:
+// pop the stack if it must, then visit the inner node it is at (both child
+// boxes against every frustum that entered it), into the child more frusta want.
+fn traversal_step() {
+    if !t_done && p_end == 0u && t_popping {
+        if t_depth == 0u {
+            t_done = true;
+        } else {
+            t_depth -= 1u;
+            let m = stack_mask[t_depth] & alive;
+            if m != 0u {
+                t_popping = false;
+                let n = stack_node[t_depth];
+                let c = load_node(n);
+                enter(n, m, c.first, c.count);
+            }
+        }
+    }
+    if !t_done && p_end == 0u && !t_popping {
+        let l = t_children;
+        let pair = load_node_pair(l);
+        let nl = pair[0];
+        let nr = pair[1];
+        n_nodes += 1u;
+        n_boxes += 2u;
+        let mine = (t_mask & (1u << g_lane)) != 0u && !is_done();
+        let ml = ballot16(mine && frustum_may_hit_box(nl));
+        let mr = ballot16(mine && frustum_may_hit_box(nr));
+        // Into the child more frusta want first.
+        let d = descend(l, ml, mr, countOneBits(mr) > countOneBits(ml));
+        if d.later_mask != 0u {
+            // The host checked that the BVH is shallower than the stack.
+            stack_node[min(t_depth, STACK_SIZE - 1u)] = d.later;
+            stack_mask[min(t_depth, STACK_SIZE - 1u)] = d.later_mask;
+            t_depth += 1u;
+        }
+        if d.mask != 0u {
+            let right = d.node != l;
+            enter(d.node, d.mask, select(nl.first, nr.first, right), select(nl.count, nr.count, right));
+        } else {
+            t_popping = true;
+        }
+    }
+}
+
+// The leaf stage takes the pending leaf when it has none.
+fn take_pending() {
+    if cand == 0u && cursor >= end && p_end != 0u {
+        cursor = p_first;
+        end = p_end;
+        leaf_mask = p_mask;
+        p_first = 0u;
+        p_end = 0u;
+    }
+}
+
 @compute @workgroup_size(VEC16_WG_SIZE)
 fn main(ids: Vec16Ids) {
     vec16_init(ids);
@@ -368,33 +464,27 @@ fn main(ids: Vec16Ids) {
     }
     setup_frustum(texel, g_lane, inside);
 
-    // The traversal state; every lane holds the same values.
-    var node = 0u;      // inner node to visit next (when not in a leaf)
-    var mask = 0u;      // frusta that entered `node`
-    var cursor = 0u;    // next triangle of the current leaf
-    var end = 0u;       // end of the current leaf's triangles
-    var alive = 0u;     // frusta not yet done
-    var depth = 0u;     // stack depth
-    var popping = 0u;   // 1: the next step pops the stack
-    var children = 0u;  // the first child of `node` (when it is an inner node)
-    var cand = 0u;      // transposed leaves: frusta still to test against triangle cursor - 1
-    var cand_tri: BvhTriangle;  // that triangle, loaded once for all its candidates
+    var cand_tri: BvhTriangle;  // transposed leaves: triangle cursor - 1, loaded once for all its candidates
     var running = true;
-    var n_nodes = 0u;
-    var n_boxes = 0u;
     var n_tris = 0u;
     var n_after_culling = 0u;
     var n_tests = 0u;
     if params.resume != 0u {
-        node = uniform16(state[base + 1u]);
-        mask = uniform16(state[base + 2u]);
+        t_node = uniform16(state[base + 1u]);
+        t_mask = uniform16(state[base + 2u]);
         cursor = uniform16(state[base + 3u]);
         end = uniform16(state[base + 4u]);
         alive = uniform16(state[base + 5u]);
-        depth = uniform16(state[base + 6u]);
-        popping = uniform16(state[base + 7u]);
-        children = load_node(node).first;
+        t_depth = uniform16(state[base + 6u]);
+        let flags = uniform16(state[base + 7u]);
+        t_popping = (flags & 1u) != 0u;
+        t_done = (flags & 2u) != 0u;
+        t_children = load_node(t_node).first;
         cand = uniform16(state[base + ST_CAND]);
+        leaf_mask = uniform16(state[base + ST_LEAF_MASK]);
+        p_first = uniform16(state[base + ST_PENDING]);
+        p_end = uniform16(state[base + ST_PENDING + 1u]);
+        p_mask = uniform16(state[base + ST_PENDING + 2u]);
         if cand != 0u {
             cand_tri = load_triangle(cursor - 1u);
         }
@@ -403,31 +493,30 @@ fn main(ids: Vec16Ids) {
         if SHRINK && (shrunk_for & SHRINK_FLAG) != 0u {
             shrink_to(shrunk_for & MASK_FULL);
         }
-        for (var i = 0u; i < depth; i++) {
+        for (var i = 0u; i < t_depth; i++) {
             stack_node[i] = uniform16(state[base + ST_STACK_NODE + i]);
             stack_mask[i] = uniform16(state[base + ST_STACK_MASK + i]);
         }
     } else {
         alive = ballot16(!is_done());
         let root = load_node(0u);
-        mask = ballot16(!is_done() && frustum_may_hit_box(root));
+        let m = ballot16(!is_done() && frustum_may_hit_box(root));
         n_boxes = 1u;
-        running = mask != 0u;
-        children = root.first;
-        if root.count > 0u {
-            cursor = root.first;
-            end = root.first + root.count;
-        }
+        running = m != 0u;
+        enter(0u, m, root.first, root.count);
     }
 
-    // Each pass of the loop may do, in this order: one stack pop, one inner
-    // node, one triangle of a leaf (with transposed leaves, then the inner loop
-    // over the triangle's candidate frusta) and the end of a leaf. lavapipe
-    // runs every branch of the body (masked) at every pass, so a pass that did
-    // only one of them would pay for all four; and it counts every pass of
-    // either loop towards its limit: a loop nested in another costs it a pass
-    // each time the outer body runs, even when no lane enters it. So nothing
-    // else loops in here (the state is saved after the loop).
+    // Each pass of the loop may do, in this order: two traversal steps (each a
+    // stack pop and an inner node), one or two triangles of the current leaf
+    // (with transposed leaves, one, then the inner loop over its candidate
+    // frusta) and the end of a leaf. lavapipe runs every branch of the body
+    // (masked) at every pass, so a pass pays for all of it whatever it does:
+    // the two stages let it do work in both, and two traversal steps match the
+    // traversal's steps to the leaves' (Sponza: 948K passes with one stage,
+    // 849K with two, 648K with two traversal steps). lavapipe also counts every
+    // pass of either loop towards its limit: a loop nested in another costs it
+    // a pass each time the outer body runs, even when no lane enters it. So
+    // nothing else loops in here (the state is saved after the loop).
     var iterations = 0u;
     var suspended = false;
     loop {
@@ -439,84 +528,32 @@ fn main(ids: Vec16Ids) {
             break;
         }
         iterations += 1u;
-        let between_leaves = cand == 0u && cursor >= end;
-        if between_leaves && popping != 0u {
-            if depth == 0u {
-                running = false;
+        take_pending();
+        traversal_step();
+        traversal_step();
+        take_pending();
+        let in_leaf = cand != 0u || cursor < end;
+        // With cand != 0 a resumed tile goes on with the candidates of triangle cursor - 1.
+        if cand == 0u && cursor < end {
+            let tri = load_triangle(cursor);
+            cursor += 1u;
+            n_tris += 1u;
+            let mine = (leaf_mask & (1u << g_lane)) != 0u && !is_done();
+            if LEAF_TRANSPOSED {
+                cand_tri = tri;
+                cand = ballot16(mine && !frustum_culls_triangle(tri));
+                n_tests += countOneBits(cand);
+                n_after_culling += u32(cand != 0u);
             } else {
-                depth -= 1u;
-                let m = stack_mask[depth] & alive;
-                if m != 0u {
-                    node = stack_node[depth];
-                    mask = m;
-                    popping = 0u;
-                    let c = load_node(node);
-                    children = c.first;
-                    if c.count > 0u {
-                        cursor = c.first;
-                        end = c.first + c.count;
-                    }
+                var r = 0u;
+                if mine {
+                    r = test_triangle(tri);
                 }
-            }
-        }
-        if running && between_leaves && popping == 0u && cursor >= end {
-            let l = children;
-            let pair = load_node_pair(l);
-            let nl = pair[0];
-            let nr = pair[1];
-            n_nodes += 1u;
-            n_boxes += 2u;
-            let mine = (mask & (1u << g_lane)) != 0u && !is_done();
-            let ml = ballot16(mine && frustum_may_hit_box(nl));
-            let mr = ballot16(mine && frustum_may_hit_box(nr));
-            // Into the child more frusta want first.
-            let d = descend(l, ml, mr, countOneBits(mr) > countOneBits(ml));
-            if d.later_mask != 0u {
-                // The host checked that the BVH is shallower than the stack.
-                stack_node[min(depth, STACK_SIZE - 1u)] = d.later;
-                stack_mask[min(depth, STACK_SIZE - 1u)] = d.later_mask;
-                depth += 1u;
-            }
-            if d.mask != 0u {
-                node = d.node;
-                mask = d.mask;
-                let right = d.node != l;
-                let first = select(nl.first, nr.first, right);
-                let count = select(nl.count, nr.count, right);
-                children = first;
-                if count > 0u {
-                    cursor = first;
-                    end = first + count;
-                }
-            } else {
-                popping = 1u;
-            }
-        }
-        var in_leaf = false;
-        if cand != 0u || cursor < end {
-            in_leaf = true;
-            // With cand != 0 a resumed tile goes on with the candidates of triangle cursor - 1.
-            if cand == 0u {
-                let tri = load_triangle(cursor);
-                cursor += 1u;
-                n_tris += 1u;
-                let mine = (mask & (1u << g_lane)) != 0u && !is_done();
-                if LEAF_TRANSPOSED {
-                    cand_tri = tri;
-                    cand = ballot16(mine && !frustum_culls_triangle(tri));
-                    n_tests += countOneBits(cand);
-                    n_after_culling += u32(cand != 0u);
-                } else {
-                    var r = 0u;
-                    if mine {
-                        r = test_triangle(tri);
-                    }
-                    f_occluded |= r & MASK_FULL;
-                    if COUNTERS {
-                        let tested = ballot16((r & TESTED) != 0u);
-                        n_tests += countOneBits(tested);
-                        n_after_culling += u32(tested != 0u);
-                    }
+                f_occluded |= r & MASK_FULL;
+                if COUNTERS {
+                    let tested = ballot16((r & TESTED) != 0u);
+                    n_tests += countOneBits(tested);
+                    n_after_culling += u32(tested != 0u);
                 }
             }
         }
@@ -524,7 +561,7 @@ fn main(ids: Vec16Ids) {
             let tri = load_triangle(cursor);
             cursor += 1u;
             n_tris += 1u;
-            let mine = (mask & (1u << g_lane)) != 0u && !is_done();
+            let mine = (leaf_mask & (1u << g_lane)) != 0u && !is_done();
             var r = 0u;
             if mine {
                 r = test_triangle(tri);
@@ -560,7 +597,9 @@ fn main(ids: Vec16Ids) {
             }
             alive = ballot16(!is_done());
             running = alive != 0u;
-            popping = 1u;
+        }
+        if t_done && p_end == 0u && cand == 0u && cursor >= end {
+            running = false;
         }
     }
     if COUNTERS && g_lane == 0u {
@@ -576,15 +615,19 @@ fn main(ids: Vec16Ids) {
         state[base + ST_SHRUNK + g_lane] = f_shrunk_for;
         if g_lane == 0u {
             state[base + ST_STATUS] = STATUS_SUSPENDED;
-            state[base + 1u] = node;
-            state[base + 2u] = mask;
+            state[base + 1u] = t_node;
+            state[base + 2u] = t_mask;
             state[base + 3u] = cursor;
             state[base + 4u] = end;
             state[base + 5u] = alive;
-            state[base + 6u] = depth;
-            state[base + 7u] = popping;
+            state[base + 6u] = t_depth;
+            state[base + 7u] = u32(t_popping) | (u32(t_done) << 1u);
             state[base + ST_CAND] = cand;
-            for (var i = 0u; i < depth; i++) {
+            state[base + ST_LEAF_MASK] = leaf_mask;
+            state[base + ST_PENDING] = p_first;
+            state[base + ST_PENDING + 1u] = p_end;
+            state[base + ST_PENDING + 2u] = p_mask;
+            for (var i = 0u; i < t_depth; i++) {
                 state[base + ST_STACK_NODE + i] = stack_node[i];
                 state[base + ST_STACK_MASK + i] = stack_mask[i];
             }

@@ -450,7 +450,7 @@ fn loop_limit_tile_still_matches_oracle() {
     // frustum): a sparser layer (of larger triangles, for as much shadow) exceeds
     // the limit as well and keeps lavapipe fast.
     for (leaf_mode, occluders, size) in [
-        (LeafMode::PerLane, 100_000, 0.0056),
+        (LeafMode::PerLane, 130_000, 0.0056),
         (LeafMode::Transposed, 4_000, 0.025),
     ] {
         let (scene, view) = occluder_layer_scene(occluders, size);

@@ -12,7 +12,7 @@ use penumbra::gpu::{
 };
 use penumbra::layout::GBufferTexel;
 use penumbra::reference::counters::Counters;
-use penumbra::reference::mft::{mft_masks, mft_masks_with};
+use penumbra::reference::mft::{TileOptions, mft_masks, mft_masks_with_options};
 use penumbra::reference::packet::packet_masks;
 use penumbra::reference::shadow::{ITERATION_BUDGET, MASK_FULL, reference_counts, shadow_params};
 use penumbra::view::{QuadLight, View};
@@ -162,15 +162,23 @@ fn counters_equal_the_cpu_twins() {
         let texels = frame.gbuffer.unwrap();
         let params = shadow_params(&view.light, w, h);
         let points = sampling::light_points(&view.light);
-        let (mft_plain, mft_twin) = mft_masks(&bvh, &texels, &points, &params, ITERATION_BUDGET);
-        let (_, mft_shrunk) = mft_masks_with(&bvh, &texels, &points, &params, ITERATION_BUDGET, true);
+        let (mft_plain, _) = mft_masks(&bvh, &texels, &points, &params, ITERATION_BUDGET);
+        // The twin's counters as the kernel runs: shrinking and leaf mode.
+        let twin = |shrink, transposed| {
+            let options = TileOptions {
+                budget: ITERATION_BUDGET,
+                shrink,
+                transposed,
+            };
+            mft_masks_with_options(&bvh, &texels, &points, &params, &options).1
+        };
         let (_, packet_twin) = packet_masks(&bvh, &texels, &points, &params, ITERATION_BUDGET);
         for variant in variants() {
             for (tracer, shrink, leaf_mode, twin) in [
-                (Tracer::Mft, false, LeafMode::PerLane, mft_twin),
-                (Tracer::Mft, false, LeafMode::Transposed, mft_twin),
-                (Tracer::Mft, true, LeafMode::PerLane, mft_shrunk),
-                (Tracer::Mft, true, LeafMode::Transposed, mft_shrunk),
+                (Tracer::Mft, false, LeafMode::PerLane, twin(false, false)),
+                (Tracer::Mft, false, LeafMode::Transposed, twin(false, true)),
+                (Tracer::Mft, true, LeafMode::PerLane, twin(true, false)),
+                (Tracer::Mft, true, LeafMode::Transposed, twin(true, true)),
                 (Tracer::Packet, false, LeafMode::PerLane, packet_twin),
             ] {
                 let (masks, gpu) = run_counted(

@@ -289,9 +289,14 @@ pub use super::counters::Counters;
 
 /// The traversal state of one vector: what the GPU kernel saves when it
 /// suspends and reloads when it resumes.
+///
+/// Traversal and leaves are two stages with one leaf between them: the
+/// traversal walks on to the next leaf (`pending`) while the leaf stage tests
+/// the current one (`cursor..end` for `leaf_mask`), so that a kernel step can
+/// do both (see `shaders/shadow_mft.wgsl`).
 #[derive(Clone, Debug, Default)]
 struct VectorState {
-    /// Inner node to visit next (when not in a leaf).
+    /// Inner node to visit next (when not popping).
     node: u32,
     /// Frusta that entered `node`.
     mask: u32,
@@ -299,12 +304,19 @@ struct VectorState {
     cursor: u32,
     /// End of the current leaf's triangles.
     end: u32,
+    /// Frusta that entered the current leaf.
+    leaf_mask: u32,
+    /// The leaf the traversal found next, waiting for the leaf stage: first
+    /// triangle, end, frusta.
+    pending: Option<(u32, u32, u32)>,
     /// Frusta not yet done.
     alive: u32,
     /// Pending subtrees with the frusta that wanted them.
     stack: Vec<(u32, u32)>,
-    /// The next step pops the stack.
+    /// The next traversal step pops the stack.
     popping: bool,
+    /// The stack ran empty: the traversal has found every leaf.
+    traversal_done: bool,
 }
 
 fn ballot(frusta: &[Frustum; 16], pred: impl Fn(usize, &Frustum) -> bool) -> u32 {
@@ -316,14 +328,26 @@ fn ballot(frusta: &[Frustum; 16], pred: impl Fn(usize, &Frustum) -> bool) -> u32
 }
 
 impl VectorState {
-    /// Moves to node `c` with frustum mask `m`, opening its triangle range if it is a leaf.
+    /// Moves to node `c` with frustum mask `m`; a leaf waits in `pending` and the
+    /// traversal goes on from the stack.
     fn enter(&mut self, bvh: &Bvh, c: u32, m: u32) {
         self.node = c;
         self.mask = m;
         let n = &bvh.nodes[c as usize];
         if n.is_leaf() {
-            self.cursor = n.first;
-            self.end = n.first + n.count;
+            self.pending = Some((n.first, n.first + n.count, m));
+            self.popping = true;
+        }
+    }
+
+    /// The leaf stage takes the pending leaf when it has none.
+    fn take_pending(&mut self, cand: u32) {
+        if cand == 0 && self.cursor >= self.end {
+            if let Some((first, end, m)) = self.pending.take() {
+                self.cursor = first;
+                self.end = end;
+                self.leaf_mask = m;
+            }
         }
     }
 }
@@ -381,7 +405,7 @@ fn leaf_triangle(
     counters.triangles_accessed += 1;
     let mut survived = 0u32;
     for (i, f) in frusta.iter_mut().enumerate() {
-        if st.mask & (1 << i) != 0 && !f.is_done() {
+        if st.leaf_mask & (1 << i) != 0 && !f.is_done() {
             if let TriangleOutcome::Tested(hits) = frustum_test_triangle(f, tri, params) {
                 survived |= 1 << i;
                 f.occluded |= hits;
@@ -393,11 +417,56 @@ fn leaf_triangle(
     survived
 }
 
+/// One step of the traversal stage, unless a found leaf waits or it is done: pop
+/// the stack if it must, then visit the inner node it is at (both child boxes
+/// against every frustum that entered it), into the child more frusta want.
+fn traversal_step(
+    bvh: &Bvh,
+    st: &mut VectorState,
+    frusta: &[Frustum; 16],
+    params: &ShadowParams,
+    counters: &mut Counters,
+) {
+    if !st.traversal_done && st.pending.is_none() && st.popping {
+        match st.stack.pop() {
+            None => st.traversal_done = true,
+            Some((c, m)) if m & st.alive != 0 => {
+                st.popping = false;
+                st.enter(bvh, c, m & st.alive);
+            }
+            Some(_) => {}
+        }
+    }
+    if !st.traversal_done && st.pending.is_none() && !st.popping {
+        let l = bvh.nodes[st.node as usize].first;
+        counters.nodes_visited += 1;
+        counters.box_tests += 2;
+        let mask = st.mask;
+        let wants = |c: u32| {
+            ballot(frusta, |i, f| {
+                mask & (1 << i) != 0 && !f.is_done() && frustum_may_hit_box(f, &bvh.nodes[c as usize], params)
+            })
+        };
+        let (ml, mr) = (wants(l), wants(l + 1));
+        // Into the child more frusta want first.
+        let d = descend(l, ml, mr, mr.count_ones() > ml.count_ones());
+        if let Some(later) = d.later {
+            assert!(st.stack.len() < STACK_SIZE, "BVH deeper than the traversal stack");
+            st.stack.push(later);
+        }
+        match d.now {
+            Some((c, m)) => st.enter(bvh, c, m),
+            None => st.popping = true,
+        }
+    }
+}
+
 /// [`trace_tile`] under `options`.
 ///
 /// Each loop iteration is one step of the kernel, which may do, in this
-/// order: one stack pop, one inner node, one or two leaf triangles, and the
-/// end of a leaf (see `shaders/shadow_mft.wgsl` for why).
+/// order: two traversal steps (each a stack pop and an inner node), one or two
+/// triangles of the current leaf, and the end of a leaf (see
+/// `shaders/shadow_mft.wgsl` for why).
 pub fn trace_tile_with(
     bvh: &Bvh,
     mut frusta: [Frustum; 16],
@@ -429,41 +498,12 @@ pub fn trace_tile_with(
         }
         iterations += 1;
         counters.traversal_steps += 1;
-        let between_leaves = cand == 0 && st.cursor >= st.end;
-        if between_leaves && st.popping {
-            match st.stack.pop() {
-                None => running = false,
-                Some((c, m)) if m & st.alive != 0 => {
-                    st.popping = false;
-                    st.enter(bvh, c, m & st.alive);
-                }
-                Some(_) => {}
-            }
-        }
-        if running && between_leaves && !st.popping && st.cursor >= st.end {
-            let l = bvh.nodes[st.node as usize].first;
-            counters.nodes_visited += 1;
-            counters.box_tests += 2;
-            let mask = st.mask;
-            let wants = |c: u32| {
-                ballot(&frusta, |i, f| {
-                    mask & (1 << i) != 0
-                        && !f.is_done()
-                        && frustum_may_hit_box(f, &bvh.nodes[c as usize], params)
-                })
-            };
-            let (ml, mr) = (wants(l), wants(l + 1));
-            // Into the child more frusta want first.
-            let d = descend(l, ml, mr, mr.count_ones() > ml.count_ones());
-            if let Some(later) = d.later {
-                assert!(st.stack.len() < STACK_SIZE, "BVH deeper than the traversal stack");
-                st.stack.push(later);
-            }
-            match d.now {
-                Some((c, m)) => st.enter(bvh, c, m),
-                None => st.popping = true,
-            }
-        }
+        st.take_pending(cand);
+        // The traversal stage, twice: it takes about as many steps as the leaves.
+        traversal_step(bvh, &mut st, &frusta, params, counters);
+        traversal_step(bvh, &mut st, &frusta, params, counters);
+        // The leaf stage: up to two triangles (transposed: one, then its candidates).
+        st.take_pending(cand);
         let in_leaf = cand != 0 || st.cursor < st.end;
         if cand == 0 && st.cursor < st.end {
             let survived = leaf_triangle(bvh, &mut st, &mut frusta, params, counters);
@@ -493,7 +533,9 @@ pub fn trace_tile_with(
             }
             st.alive = ballot(&frusta, |_, f| !f.is_done());
             running = st.alive != 0;
-            st.popping = true;
+        }
+        if st.traversal_done && st.pending.is_none() && cand == 0 && st.cursor >= st.end {
+            running = false;
         }
     }
     frusta.map(|f| f.occluded)
@@ -519,6 +561,24 @@ pub fn mft_masks_with(
     params: &ShadowParams,
     budget: u32,
     shrink: bool,
+) -> (Vec<u32>, Counters) {
+    let options = TileOptions {
+        budget,
+        shrink,
+        transposed: false,
+    };
+    mft_masks_with_options(bvh, gbuffer, light_points, params, &options)
+}
+
+/// [`mft_masks`] as the kernel runs under `options`. The masks do not depend on
+/// the leaf mode; the counters do (transposed leaves take more steps per leaf,
+/// so the traversal stage runs ahead of them by other nodes).
+pub fn mft_masks_with_options(
+    bvh: &Bvh,
+    gbuffer: &[GBufferTexel],
+    light_points: &[Vec3],
+    params: &ShadowParams,
+    options: &TileOptions,
 ) -> (Vec<u32>, Counters) {
     let (w, h) = (params.width as usize, params.height as usize);
     assert_eq!(
@@ -554,17 +614,7 @@ pub fn mft_masks_with(
                             });
                             out.push((
                                 ty * tw + tx,
-                                trace_tile_with(
-                                    bvh,
-                                    frusta,
-                                    params,
-                                    &TileOptions {
-                                        budget,
-                                        shrink,
-                                        transposed: false,
-                                    },
-                                    &mut counters,
-                                ),
+                                trace_tile_with(bvh, frusta, params, options, &mut counters),
                             ));
                         }
                     }
