@@ -92,6 +92,9 @@ var<private> leaf_mask: u32;   // frusta that entered the current leaf
 var<private> cand: u32;        // transposed leaves: frusta still to test against triangle cursor - 1
 var<private> n_nodes: u32;     // counters (COUNTERS)
 var<private> n_boxes: u32;
+var<private> n_tris: u32;
+var<private> n_after_culling: u32;
+var<private> n_tests: u32;
 
 // Transposed leaves: every lane's ray origin, 16 per vector of the workgroup,
 // so that any lane can build the rays of any frustum of its vector.
@@ -426,6 +429,24 @@ fn traversal_step() {
     }
 }
 
+// Per-lane leaves: the next triangle of the current leaf against this lane's
+// frustum and its 16 rays.
+fn per_lane_triangle() {
+    let tri = load_triangle(cursor);
+    cursor += 1u;
+    n_tris += 1u;
+    var r = 0u;
+    if (leaf_mask & (1u << g_lane)) != 0u && !is_done() {
+        r = test_triangle(tri);
+    }
+    f_occluded |= r & MASK_FULL;
+    if COUNTERS {
+        let tested = ballot16((r & TESTED) != 0u);
+        n_tests += countOneBits(tested);
+        n_after_culling += u32(tested != 0u);
+    }
+}
+
 // The leaf stage takes the pending leaf when it has none.
 fn take_pending() {
     if cand == 0u && cursor >= end && p_end != 0u {
@@ -466,9 +487,6 @@ fn main(ids: Vec16Ids) {
 
     var cand_tri: BvhTriangle;  // transposed leaves: triangle cursor - 1, loaded once for all its candidates
     var running = true;
-    var n_tris = 0u;
-    var n_after_culling = 0u;
-    var n_tests = 0u;
     if params.resume != 0u {
         t_node = uniform16(state[base + 1u]);
         t_mask = uniform16(state[base + 2u]);
@@ -534,44 +552,20 @@ fn main(ids: Vec16Ids) {
         take_pending();
         let in_leaf = cand != 0u || cursor < end;
         // With cand != 0 a resumed tile goes on with the candidates of triangle cursor - 1.
-        if cand == 0u && cursor < end {
-            let tri = load_triangle(cursor);
+        if LEAF_TRANSPOSED && cand == 0u && cursor < end {
+            cand_tri = load_triangle(cursor);
             cursor += 1u;
             n_tris += 1u;
             let mine = (leaf_mask & (1u << g_lane)) != 0u && !is_done();
-            if LEAF_TRANSPOSED {
-                cand_tri = tri;
-                cand = ballot16(mine && !frustum_culls_triangle(tri));
-                n_tests += countOneBits(cand);
-                n_after_culling += u32(cand != 0u);
-            } else {
-                var r = 0u;
-                if mine {
-                    r = test_triangle(tri);
-                }
-                f_occluded |= r & MASK_FULL;
-                if COUNTERS {
-                    let tested = ballot16((r & TESTED) != 0u);
-                    n_tests += countOneBits(tested);
-                    n_after_culling += u32(tested != 0u);
-                }
-            }
+            cand = ballot16(mine && !frustum_culls_triangle(cand_tri));
+            n_tests += countOneBits(cand);
+            n_after_culling += u32(cand != 0u);
         }
         if !LEAF_TRANSPOSED && cursor < end {
-            let tri = load_triangle(cursor);
-            cursor += 1u;
-            n_tris += 1u;
-            let mine = (leaf_mask & (1u << g_lane)) != 0u && !is_done();
-            var r = 0u;
-            if mine {
-                r = test_triangle(tri);
-            }
-            f_occluded |= r & MASK_FULL;
-            if COUNTERS {
-                let tested = ballot16((r & TESTED) != 0u);
-                n_tests += countOneBits(tested);
-                n_after_culling += u32(tested != 0u);
-            }
+            per_lane_triangle();
+        }
+        if !LEAF_TRANSPOSED && cursor < end {
+            per_lane_triangle();
         }
         if LEAF_TRANSPOSED {
             // The candidate frusta, lowest first: frustum f meets the triangle
