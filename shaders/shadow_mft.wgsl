@@ -10,7 +10,7 @@
 const STACK_SIZE: u32 = 64u;
 const MASK_FULL: u32 = 0xffffu;
 const MASK_SKY: u32 = 0x10000u;
-// Suspended-state slot of a tile: status, node, mask, cursor, end, alive,
+// Suspended-state slot of a tile: status, children, mask, cursor, end, alive,
 // stack depth, popping (| 2: traversal done), 16 lane masks, 64 stack nodes,
 // 64 stack masks, the candidate frusta of a transposed leaf (`cand`), the
 // current leaf's frusta, the pending leaf (first, end, frusta), 3 words
@@ -76,9 +76,8 @@ var<private> stack_mask: array<u32, 64>;
 // traversal walks on to the next leaf (`p_*`) while the leaf stage tests the
 // current one, so that one pass of the loop can do work in both. Every lane
 // holds the same values. Twin: reference::mft::VectorState.
-var<private> t_node: u32;      // inner node to visit next (when not popping)
-var<private> t_mask: u32;      // frusta that entered `t_node`
-var<private> t_children: u32;  // the first child of `t_node`
+var<private> t_children: u32;  // first child of the inner node to visit next (when not popping)
+var<private> t_mask: u32;      // frusta that entered that node
 var<private> t_depth: u32;     // stack depth
 var<private> t_popping: bool;  // the next traversal step pops the stack
 var<private> t_done: bool;     // the stack ran empty: every leaf was found
@@ -368,11 +367,10 @@ fn transposed_ray_hits(tri: BvhTriangle, f: u32) -> bool {
     return w.d != 0.0 && st_hit(edge_functions(w, o), point_st(light_points[f * 16u + g_lane].xyz, light_frame()));
 }
 
-// Moves the traversal to node `n` (first child or triangle `first`, `count`
+// Moves the traversal to a node (first child or triangle `first`, `count`
 // triangles) with frusta `m`; a leaf waits for the leaf stage and the
 // traversal goes on from the stack.
-fn enter(n: u32, m: u32, first: u32, count: u32) {
-    t_node = n;
+fn enter(m: u32, first: u32, count: u32) {
     t_mask = m;
     if count > 0u {
         p_first = first;
@@ -396,9 +394,8 @@ fn traversal_step() {
             let m = stack_mask[t_depth] & alive;
             if m != 0u {
                 t_popping = false;
-                let n = stack_node[t_depth];
-                let c = load_node(n);
-                enter(n, m, c.first, c.count);
+                let c = load_node(stack_node[t_depth]);
+                enter(m, c.first, c.count);
             }
         }
     }
@@ -422,7 +419,7 @@ fn traversal_step() {
         }
         if d.mask != 0u {
             let right = d.node != l;
-            enter(d.node, d.mask, select(nl.first, nr.first, right), select(nl.count, nr.count, right));
+            enter(d.mask, select(nl.first, nr.first, right), select(nl.count, nr.count, right));
         } else {
             t_popping = true;
         }
@@ -488,7 +485,7 @@ fn main(ids: Vec16Ids) {
     var cand_tri: BvhTriangle;  // transposed leaves: triangle cursor - 1, loaded once for all its candidates
     var running = true;
     if params.resume != 0u {
-        t_node = uniform16(state[base + 1u]);
+        t_children = uniform16(state[base + 1u]);
         t_mask = uniform16(state[base + 2u]);
         cursor = uniform16(state[base + 3u]);
         end = uniform16(state[base + 4u]);
@@ -497,7 +494,6 @@ fn main(ids: Vec16Ids) {
         let flags = uniform16(state[base + 7u]);
         t_popping = (flags & 1u) != 0u;
         t_done = (flags & 2u) != 0u;
-        t_children = load_node(t_node).first;
         cand = uniform16(state[base + ST_CAND]);
         leaf_mask = uniform16(state[base + ST_LEAF_MASK]);
         p_first = uniform16(state[base + ST_PENDING]);
@@ -521,7 +517,7 @@ fn main(ids: Vec16Ids) {
         let m = ballot16(!is_done() && frustum_may_hit_box(root));
         n_boxes = 1u;
         running = m != 0u;
-        enter(0u, m, root.first, root.count);
+        enter(m, root.first, root.count);
     }
 
     // Each pass of the loop may do, in this order: two traversal steps (each a
@@ -609,7 +605,7 @@ fn main(ids: Vec16Ids) {
         state[base + ST_SHRUNK + g_lane] = f_shrunk_for;
         if g_lane == 0u {
             state[base + ST_STATUS] = STATUS_SUSPENDED;
-            state[base + 1u] = t_node;
+            state[base + 1u] = t_children;
             state[base + 2u] = t_mask;
             state[base + 3u] = cursor;
             state[base + 4u] = end;

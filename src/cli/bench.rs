@@ -584,11 +584,7 @@ fn bench_primary(
                 PrimaryTracer::PerRay => "per-ray",
             }
             .to_owned(),
-            primary_ms_min: if times.is_empty() {
-                f64::NAN
-            } else {
-                times.iter().copied().fold(f64::INFINITY, f64::min)
-            },
+            primary_ms_min: times.iter().copied().reduce(f64::min).unwrap_or(f64::NAN),
             primary_ms_median: median(&times),
             primary_ms: times,
             mft_speedup: f64::NAN,
