@@ -38,11 +38,5 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if REFERENCE_RAYS != 0u {
         visibility = 1.0 - f32(mask) / f32(REFERENCE_RAYS);
     }
-    let w = params.light_center - texel.origin;
-    let r2 = max(dot(w, w), 1e-12);
-    let r = sqrt(r2);
-    let cos_surface = max(dot(texel.normal, w) / r, 0.0);
-    let cos_light = max(-dot(params.light_normal, w) / r, 0.0);
-    let irradiance = params.radiance * (params.light_area * cos_surface * cos_light / r2);
-    values[p] = vec4<f32>(irradiance * visibility, visibility);
+    values[p] = vec4<f32>(unshadowed_irradiance(params, texel) * visibility, visibility);
 }

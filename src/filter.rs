@@ -36,14 +36,15 @@
 
 use bytemuck::{Pod, Zeroable};
 
-/// WGSL source of the filter kernel (entry point `main`, workgroup
-/// [`WORKGROUP_SIZE`]² invocations, one per pixel).
+/// The filter kernel is `shaders/filter.wgsl` (entry point `main`, workgroup
+/// [`WORKGROUP_SIZE`]² invocations, one per pixel), assembled with the window of
+/// `shaders/shared/filter_window.wgsl` by [`crate::shaders::assemble`].
 ///
-/// Bindings, group 0: 0 `params: FilterParams` (uniform), 1 `values:
+/// Bindings, group 0: 0 `filter_params: FilterParams` (uniform), 1 `values:
 /// array<vec4<f32>>`, 2 `depth: array<f32>`, 3 `normal: array<vec4<f32>>`
 /// (16-byte stride, xyz used; see [`normals_for_gpu`]), all read-only storage,
 /// and 4 `filtered: array<vec4<f32>>` (read-write storage, the output).
-pub const FILTER_WGSL: &str = include_str!("../shaders/filter.wgsl");
+pub const FILTER_KERNEL: &str = "filter";
 
 /// The kernel's workgroup is `WORKGROUP_SIZE × WORKGROUP_SIZE`; dispatch
 /// `ceil(width / 8) × ceil(height / 8)` workgroups. Equal to `WG_SIZE` in the WGSL
@@ -203,30 +204,7 @@ pub fn filter_pixel(
     if d_c <= 0.0 {
         return values[c_ix];
     }
-    let n_c = normal[c_ix];
-    // First the taps the centre accepts, one bit each: bit (dy + 2)·5 + (dx + 2).
-    let mut accepted = 0u32;
-    for dy in -2i32..=2 {
-        let ny = y as i32 + dy;
-        if ny < 0 || ny >= params.height as i32 {
-            continue;
-        }
-        for dx in -2i32..=2 {
-            let nx = x as i32 + dx;
-            if nx < 0 || nx >= params.width as i32 {
-                continue;
-            }
-            let ix = ny as usize * width + nx as usize;
-            let similar = same_surface(params, d_c, n_c, depth[ix], normal[ix])
-                && (values[ix][3] - values[c_ix][3]).abs() <= params.visibility_tolerance;
-            if (dx == 0 && dy == 0) || similar {
-                accepted |= 1 << ((dy + 2) * 5 + dx + 2);
-            }
-        }
-    }
-    // Then the taps whose mirror image through the centre is accepted too
-    // (bit k's mirror is bit 24 − k; reversing 32 bits moves k to 31 − k).
-    let paired = accepted & (accepted.reverse_bits() >> 7);
+    let paired = paired_taps(params, values, depth, normal, x, y);
     let mut sum = [0.0f32; 4];
     let mut weight_sum = 0.0f32;
     // The window is the 4-pixel box centred on the pixel: 5×5 taps, the outer
@@ -250,6 +228,54 @@ pub fn filter_pixel(
     }
     let n = weight_sum;
     [sum[0] / n, sum[1] / n, sum[2] / n, sum[3] / n]
+}
+
+/// Every tap of the window: bit `(dy + 2)·5 + (dx + 2)` for `dx, dy` in `−2 ..= 2`.
+pub const FULL_WINDOW: u32 = (1 << 25) - 1;
+
+/// The taps of `(x, y)`'s window that [`filter_pixel`] averages, one bit each
+/// (`(dy + 2)·5 + (dx + 2)`): inside the image, at a similar depth, normal and
+/// unfiltered visibility, and with their mirror image through the centre too;
+/// the centre always. [`FULL_WINDOW`] when nothing cuts the window. The centre
+/// must have a hit. WGSL twin: `paired_taps` in `shaders/shared/filter_window.wgsl`.
+///
+/// # Panics
+///
+/// If `(x, y)` is outside the image or a slice is shorter than the image (a caller bug).
+pub fn paired_taps(
+    params: &FilterParams,
+    values: &[[f32; 4]],
+    depth: &[f32],
+    normal: &[[f32; 3]],
+    x: u32,
+    y: u32,
+) -> u32 {
+    let width = params.width as usize;
+    let c_ix = y as usize * width + x as usize;
+    let (d_c, n_c) = (depth[c_ix], normal[c_ix]);
+    // First the taps the centre accepts, one bit each: bit (dy + 2)·5 + (dx + 2).
+    let mut accepted = 0u32;
+    for dy in -2i32..=2 {
+        let ny = y as i32 + dy;
+        if ny < 0 || ny >= params.height as i32 {
+            continue;
+        }
+        for dx in -2i32..=2 {
+            let nx = x as i32 + dx;
+            if nx < 0 || nx >= params.width as i32 {
+                continue;
+            }
+            let ix = ny as usize * width + nx as usize;
+            let similar = same_surface(params, d_c, n_c, depth[ix], normal[ix])
+                && (values[ix][3] - values[c_ix][3]).abs() <= params.visibility_tolerance;
+            if (dx == 0 && dy == 0) || similar {
+                accepted |= 1 << ((dy + 2) * 5 + dx + 2);
+            }
+        }
+    }
+    // Then the taps whose mirror image through the centre is accepted too
+    // (bit k's mirror is bit 24 − k; reversing 32 bits moves k to 31 − k).
+    accepted & (accepted.reverse_bits() >> 7)
 }
 
 /// The filter's geometry test: a neighbour with depth `d_n` and normal `n_n`
@@ -630,7 +656,8 @@ mod tests {
         assert_eq!(bytemuck::cast_slice::<_, u8>(&packed).len(), 32);
     }
 
-    fn parse_and_validate(source: &str) -> naga::Module {
+    fn parse_and_validate() -> naga::Module {
+        let source = &crate::shaders::assemble(FILTER_KERNEL, &[]).expect("filter.wgsl assembles");
         let module = naga::front::wgsl::parse_str(source)
             .unwrap_or_else(|e| panic!("filter.wgsl does not parse:\n{}", e.emit_to_string(source)));
         naga::valid::Validator::new(
@@ -644,7 +671,7 @@ mod tests {
 
     #[test]
     fn wgsl_validates_with_naga() {
-        let module = parse_and_validate(FILTER_WGSL);
+        let module = parse_and_validate();
         let entry = module
             .entry_points
             .iter()
@@ -657,7 +684,7 @@ mod tests {
     #[test]
     fn wgsl_bindings_are_as_documented() {
         use naga::{AddressSpace, StorageAccess};
-        let module = parse_and_validate(FILTER_WGSL);
+        let module = parse_and_validate();
         let mut bindings: Vec<(u32, u32, String, AddressSpace)> = module
             .global_variables
             .iter()
@@ -674,7 +701,7 @@ mod tests {
             access: StorageAccess::LOAD | StorageAccess::STORE,
         };
         let expected = [
-            (0, 0, "params", AddressSpace::Uniform),
+            (0, 0, "filter_params", AddressSpace::Uniform),
             (0, 1, "values", read),
             (0, 2, "depth", read),
             (0, 3, "normal", read),
@@ -689,7 +716,7 @@ mod tests {
 
     #[test]
     fn filter_params_layout_matches_wgsl() {
-        let module = parse_and_validate(FILTER_WGSL);
+        let module = parse_and_validate();
         let ty = module
             .types
             .iter()

@@ -37,6 +37,8 @@ pub static SOURCES: &[(&str, &str)] = &[
     ("gpu_selftest", include_str!("../shaders/gpu_selftest.wgsl")),
     ("primary", include_str!("../shaders/primary.wgsl")),
     ("primary_mft", include_str!("../shaders/primary_mft.wgsl")),
+    ("refine_select", include_str!("../shaders/refine_select.wgsl")),
+    ("refine_trace", include_str!("../shaders/refine_trace.wgsl")),
     ("shade", include_str!("../shaders/shade.wgsl")),
     ("shadow_mft", include_str!("../shaders/shadow_mft.wgsl")),
     ("shadow_packet", include_str!("../shaders/shadow_packet.wgsl")),
@@ -48,11 +50,16 @@ pub static SOURCES: &[(&str, &str)] = &[
     ),
     ("shared/counters", include_str!("../shaders/shared/counters.wgsl")),
     ("shared/descend", include_str!("../shaders/shared/descend.wgsl")),
+    (
+        "shared/filter_window",
+        include_str!("../shaders/shared/filter_window.wgsl"),
+    ),
     ("shared/frame", include_str!("../shaders/shared/frame.wgsl")),
     (
         "shared/intersect",
         include_str!("../shaders/shared/intersect.wgsl"),
     ),
+    ("shared/occluded", include_str!("../shaders/shared/occluded.wgsl")),
     ("shared/primary", include_str!("../shaders/shared/primary.wgsl")),
     ("shared/surface", include_str!("../shaders/shared/surface.wgsl")),
     (
@@ -91,6 +98,8 @@ pub const KERNELS: &[(&str, &[Aliases<'static>])] = &[
             &[("shared/vec16", "shared/vec16_workgroup")],
         ],
     ),
+    ("refine_select", &[&[]]),
+    ("refine_trace", &[&[]]),
     ("shade", &[&[]]),
     (
         "shadow_mft",

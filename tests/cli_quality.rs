@@ -40,9 +40,20 @@ fn quality_reports_every_method_on_the_generated_scenes() {
         let names: Vec<&str> = methods.iter().map(|m| m["method"].as_str().unwrap()).collect();
         assert_eq!(
             names,
-            ["mft-16-filtered", "mft-16", "reference-64", "reference-256"]
+            [
+                "mft-16-filtered",
+                "mft-16",
+                "mft-16-refined",
+                "reference-64",
+                "reference-256"
+            ]
         );
         let rmse = |i: usize| methods[i]["rmse"].as_f64().unwrap();
+        let rays = |i: usize| methods[i]["rays_per_pixel"].as_f64().unwrap();
+        assert_eq!([rays(0), rays(1), rays(3), rays(4)], [16.0, 16.0, 64.0, 256.0]);
+        // The refinement adds 240 rays at some, not all, pixels; and lowers the error.
+        assert!(rays(2) > 16.0 && rays(2) < 256.0, "{scene}: {}", rays(2));
+        assert!(rmse(2) < rmse(0), "{scene}: {stdout}");
         for (i, name) in names.iter().enumerate() {
             assert!(
                 rmse(i).is_finite() && rmse(i) > 0.0 && rmse(i) < 0.5,
@@ -51,7 +62,7 @@ fn quality_reports_every_method_on_the_generated_scenes() {
             );
         }
         // More rays, less error: a sanity check on the yardstick itself.
-        assert!(rmse(3) < rmse(2) && rmse(2) < rmse(1), "{scene}: {stdout}");
+        assert!(rmse(4) < rmse(3) && rmse(3) < rmse(1), "{scene}: {stdout}");
         assert!(report["pixels"].as_u64().unwrap() > 48 * 40 / 2);
         // Each method's error split by region: four regions, pixel and error shares
         // summing to 1, and the regions' RMSEs recombining to the method's.

@@ -83,3 +83,15 @@ struct ShadeParams {
     radiance: vec3<f32>,      // bytes 32..44: colour * intensity
     height: u32,              // bytes 44..48
 }
+
+// Irradiance from the light treated as a point at its centre, with its area and both
+// cosines, before shadowing; the shade pass and refine_trace multiply it by the visible
+// fraction. CPU twin: reference::shade::unshadowed_irradiance.
+fn unshadowed_irradiance(light: ShadeParams, texel: GBufferTexel) -> vec3<f32> {
+    let w = light.light_center - texel.origin;
+    let r2 = max(dot(w, w), 1e-12);
+    let r = sqrt(r2);
+    let cos_surface = max(dot(texel.normal, w) / r, 0.0);
+    let cos_light = max(-dot(light.light_normal, w) / r, 0.0);
+    return light.radiance * (light.light_area * cos_surface * cos_light / r2);
+}

@@ -1,6 +1,7 @@
 //! `penumbra quality`: how close each way of computing visibility gets to the
 //! exact answer (beam splitting) on the same G-buffer: MFT 16 spp with and
-//! without the filter, and the reference tracer at 64 and 256 rays per pixel;
+//! without the filter, filtered and refined, and the reference tracer at 64 and
+//! 256 rays per pixel;
 //! then where each one's error lies ([`penumbra::error_regions`]).
 
 use std::path::PathBuf;
@@ -65,8 +66,11 @@ pub struct QualityArgs {
 #[derive(Debug, Serialize)]
 struct MethodResult {
     method: String,
-    /// GPU milliseconds of its shadow pass plus its filter (0 for exact: CPU).
+    /// GPU milliseconds of its shadow pass plus its filter and refinement.
     gpu_ms: f64,
+    /// Shadow rays per pixel with geometry, on average (refinement: 16 + 240 × the
+    /// share of those pixels it refined).
+    rays_per_pixel: f64,
     rmse: f64,
     mean_abs: f64,
     max_abs: f64,
@@ -135,8 +139,8 @@ pub fn run(args: &QualityArgs) -> Result<()> {
     let mut settings = FrameSettings::new(w, h);
     settings.keep_gbuffer = true;
     settings.filter = Some((args.depth_tolerance, args.normal_tolerance));
-    // (method, visibility per pixel, GPU ms)
-    let mut methods: Vec<(String, Vec<f32>, f64)> = Vec::new();
+    // (method, visibility per pixel, GPU ms, rays per pixel with geometry)
+    let mut methods: Vec<(String, Vec<f32>, f64, f64)> = Vec::new();
     progress!("rendering MFT 16 spp…\r");
     let mft = renderer(Tracer::Mft)?;
     mft.render(&ctx, &gpu_scene, &view, &FrameSettings::new(8, 8))?; // compile before timing
@@ -146,14 +150,28 @@ pub fn run(args: &QualityArgs) -> Result<()> {
         "mft-16-filtered".into(),
         frame.filtered.iter().map(|v| v[3]).collect(),
         shadow_ms + frame.pass_ms("filter"),
+        16.0,
     ));
     methods.push((
         "mft-16".into(),
         frame.unfiltered.iter().map(|v| v[3]).collect(),
         shadow_ms,
+        16.0,
     ));
     let gbuffer = frame.gbuffer.expect("asked for the G-buffer");
     let hit: Vec<bool> = frame.masks.iter().map(|m| m & MASK_SKY == 0).collect();
+    let hits = hit.iter().filter(|&&h| h).count().max(1);
+    progress!("rendering MFT 16 spp + refinement…\r");
+    settings.refine = true;
+    let refined = mft.render(&ctx, &gpu_scene, &view, &settings)?;
+    settings.refine = false;
+    let refined_share = refined.refined.iter().filter(|&&r| r).count() as f64 / hits as f64;
+    methods.push((
+        "mft-16-refined".into(),
+        refined.filtered.iter().map(|v| v[3]).collect(),
+        refined.pass_ms("shadow") + refined.pass_ms("filter") + refined.pass_ms("refine"),
+        16.0 + 240.0 * refined_share,
+    ));
     settings.filter = None;
     settings.keep_gbuffer = false;
     for rays in [64, 256] {
@@ -165,6 +183,7 @@ pub fn run(args: &QualityArgs) -> Result<()> {
             format!("reference-{rays}"),
             f.unfiltered.iter().map(|v| v[3]).collect(),
             f.pass_ms("shadow"),
+            f64::from(rays),
         ));
     }
     let start = Instant::now();
@@ -185,8 +204,8 @@ pub fn run(args: &QualityArgs) -> Result<()> {
         exact_hit.len()
     );
     println!(
-        "  {:<18} {:>10} {:>9} {:>9} {:>9} {:>8}",
-        "method", "GPU ms", "RMSE", "mean |e|", "max |e|", "PSNR dB"
+        "  {:<18} {:>10} {:>8} {:>9} {:>9} {:>9} {:>8}",
+        "method", "GPU ms", "rays/px", "RMSE", "mean |e|", "max |e|", "PSNR dB"
     );
     let mut regions = classify_pixels(
         &gbuffer,
@@ -202,15 +221,16 @@ pub fn run(args: &QualityArgs) -> Result<()> {
         }
     }
     let mut results = Vec::new();
-    for (name, values, ms) in &methods {
+    for (name, values, ms, rays) in &methods {
         let m = ImageMetrics::of_values(&pick(values), &exact_hit);
         println!(
-            "  {name:<18} {ms:>10.1} {:>9.5} {:>9.5} {:>9.4} {:>8.2}",
+            "  {name:<18} {ms:>10.1} {rays:>8.1} {:>9.5} {:>9.5} {:>9.4} {:>8.2}",
             m.rmse, m.mean_abs, m.max_abs, m.psnr
         );
         results.push(MethodResult {
             method: name.clone(),
             gpu_ms: *ms,
+            rays_per_pixel: *rays,
             rmse: m.rmse,
             mean_abs: m.mean_abs,
             max_abs: m.max_abs,
@@ -226,7 +246,7 @@ pub fn run(args: &QualityArgs) -> Result<()> {
         })?;
         let images = methods
             .iter()
-            .map(|(n, v, _)| (n.as_str(), v))
+            .map(|(n, v, _, _)| (n.as_str(), v))
             .chain([("exact", &exact)]);
         for (name, values) in images {
             let path = dir.join(format!("{name}.exr"));

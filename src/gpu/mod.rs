@@ -17,6 +17,7 @@ pub mod kernel;
 pub mod memory;
 mod motion;
 pub mod primary_pass;
+pub mod refine;
 pub mod render;
 mod scene_buffers;
 pub mod shadow_tracer;

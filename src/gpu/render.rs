@@ -1,10 +1,13 @@
 //! The standalone frame: primary pass → shadow pass → shade pass → filter,
 //! on the GPU, read back for output.
 
+use std::sync::OnceLock;
+
 use glam::Vec3;
 
 use super::kernel::{Binding, Checks, Kernel, uniform_buffer};
 use super::primary_pass::{PrimaryPass, PrimaryStatus, PrimaryTracer};
+use super::refine::{RefineBuffers, Refinement};
 use super::shadow_tracer::{LeafMode, ShadowStats, ShadowTracer, Tracer, TracerOptions, VectorVariant};
 use super::{GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer, storage_buffer};
 use crate::filter::FilterParams;
@@ -34,6 +37,10 @@ pub struct FrameSettings {
     /// Largest tile side (a multiple of 4) to render the image in, or `None` for the
     /// largest whose buffers fit the adapter's storage-buffer limit (tests force tiling).
     pub max_tile: Option<u32>,
+    /// After the filter, trace all 256 light samples for the pixels whose filter window is
+    /// cut while visibility changes around them ([`crate::reference::refine`]). Needs the
+    /// filter and an interleaved tracer (not [`Tracer::Reference`]).
+    pub refine: bool,
 }
 
 impl FrameSettings {
@@ -48,6 +55,7 @@ impl FrameSettings {
             )),
             keep_gbuffer: false,
             max_tile: None,
+            refine: false,
         }
     }
 }
@@ -63,8 +71,12 @@ pub struct Frame {
     pub masks: Vec<u32>,
     /// Shadowed irradiance (rgb) and visibility (a) before the filter.
     pub unfiltered: Vec<[f32; 4]>,
-    /// The same after the filter (equal to `unfiltered` when the filter is off).
+    /// The same after the filter (equal to `unfiltered` when the filter is off), and
+    /// after the refinement at the refined pixels.
     pub filtered: Vec<[f32; 4]>,
+    /// Per pixel, whether the refinement traced its 256 light samples (all false
+    /// without [`FrameSettings::refine`]).
+    pub refined: Vec<bool>,
     /// Diffuse BRDF, albedo / π (rgb; a unused); 0 for sky pixels.
     pub brdf: Vec<[f32; 4]>,
     /// The G-buffer, when [`FrameSettings::keep_gbuffer`] asked for it.
@@ -158,6 +170,8 @@ pub struct Renderer {
     shadow: ShadowTracer,
     shade: Kernel,
     filter: Kernel,
+    /// Built on the first frame that asks for it.
+    refinement: OnceLock<Refinement>,
 }
 
 impl Renderer {
@@ -214,6 +228,7 @@ impl Renderer {
                 &[],
                 Checks::Checked,
             )?,
+            refinement: OnceLock::new(),
         })
     }
 
@@ -267,6 +282,18 @@ impl Renderer {
             return Err(Error::Gpu(format!(
                 "image size {w}x{h}: both sides must be at least 1"
             )));
+        }
+        if settings.refine && settings.filter.is_none() {
+            return Err(Error::invalid(
+                "FrameSettings::refine",
+                "refinement needs the filter: it refines the pixels whose filter window is cut",
+            ));
+        }
+        if settings.refine && matches!(self.shadow.tracer, Tracer::Reference { .. }) {
+            return Err(Error::invalid(
+                "FrameSettings::refine",
+                "refinement needs an interleaved tracer (mft, packet or per-ray), not the reference tracer",
+            ));
         }
         let limit = ctx.device.limits().max_texture_dimension_2d;
         if w > limit || h > limit {
@@ -393,15 +420,46 @@ impl Renderer {
             let writes = timer.pass_writes("shade");
             self.shade.record(&mut encoder, "shade", &bind, writes, groups);
         }
-        if let Some((depth_tolerance, normal_tolerance)) = settings.filter {
+        let filter_params = settings.filter.map(|(depth_tolerance, normal_tolerance)| {
             let params = FilterParams::with_tolerances(w, h, depth_tolerance, normal_tolerance);
-            let params_buf = uniform_buffer(ctx, "filter params", &params);
+            uniform_buffer(ctx, "filter params", &params)
+        });
+        if let Some(params_buf) = &filter_params {
             let bind = self
                 .filter
-                .bind(ctx, &[&params_buf, &values, &depth, &normal, &filtered]);
+                .bind(ctx, &[params_buf, &values, &depth, &normal, &filtered]);
             let writes = timer.pass_writes("filter");
             self.filter.record(&mut encoder, "filter", &bind, writes, groups);
         }
+        ctx.queue.submit([encoder.finish()]);
+
+        let mut refined = vec![false; pixels as usize];
+        if let Some(filter_params) = filter_params.as_ref().filter(|_| settings.refine) {
+            let refinement = match self.refinement.get() {
+                Some(r) => r,
+                None => {
+                    let built = Refinement::new(ctx)?;
+                    self.refinement.get_or_init(|| built)
+                }
+            };
+            let shadow_buf = uniform_buffer(ctx, "shadow params", &shadow_params(&view.light, w, h));
+            let buffers = RefineBuffers {
+                filter_params,
+                shadow_params: &shadow_buf,
+                shade_params: &shade_buf,
+                values: &values,
+                depth: &depth,
+                normal: &normal,
+                gbuffer: &gbuffer,
+                light_points: &light_points,
+                masks: &masks,
+                filtered: &filtered,
+            };
+            for p in refinement.run(ctx, scene, &buffers, (w, h), &mut timer)? {
+                refined[p as usize] = true;
+            }
+        }
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
         timer.resolve(&mut encoder);
         ctx.queue.submit([encoder.finish()]);
 
@@ -427,6 +485,7 @@ impl Renderer {
             masks: read_buffer(ctx, &masks, 0..pixels * 4)?,
             unfiltered,
             filtered,
+            refined,
             gbuffer,
             timings: timer.read(ctx)?,
             shadow_stats,
@@ -494,6 +553,7 @@ impl Frame {
             masks: vec![0; n],
             unfiltered: vec![[0.0; 4]; n],
             filtered: vec![[0.0; 4]; n],
+            refined: vec![false; n],
             brdf: vec![[0.0; 4]; n],
             gbuffer: keep_gbuffer.then(|| vec![GBufferTexel::default(); n]),
             timings: Vec::new(),
@@ -514,6 +574,7 @@ impl Frame {
             self.masks[dst..dst + n].copy_from_slice(&tile.masks[src..src + n]);
             self.unfiltered[dst..dst + n].copy_from_slice(&tile.unfiltered[src..src + n]);
             self.filtered[dst..dst + n].copy_from_slice(&tile.filtered[src..src + n]);
+            self.refined[dst..dst + n].copy_from_slice(&tile.refined[src..src + n]);
             self.brdf[dst..dst + n].copy_from_slice(&tile.brdf[src..src + n]);
             if let (Some(g), Some(t)) = (self.gbuffer.as_mut(), tile.gbuffer.as_ref()) {
                 g[dst..dst + n].copy_from_slice(&t[src..src + n]);

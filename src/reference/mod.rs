@@ -15,6 +15,7 @@ mod parallel;
 mod polygon;
 pub mod primary;
 pub mod primary_mft;
+pub mod refine;
 pub mod shade;
 pub mod shadow;
 pub mod surface;

@@ -30,12 +30,17 @@ pub fn shade_pixel(params: &ShadeParams, texel: &GBufferTexel, mask: u32) -> Vec
         return Vec4::new(0.0, 0.0, 0.0, 1.0);
     }
     let v = visibility(mask);
+    let shadowed: Vec3 = unshadowed_irradiance(params, texel) * v;
+    shadowed.extend(v)
+}
+
+/// Irradiance from the light treated as a point at its centre, with its area and
+/// both cosines, before shadowing (WGSL `unshadowed_irradiance` in `shared/frame`).
+pub fn unshadowed_irradiance(params: &ShadeParams, texel: &GBufferTexel) -> Vec3 {
     let w = params.light_center - texel.origin;
     let r2 = w.dot(w).max(1e-12);
     let r = r2.sqrt();
     let cos_surface = (texel.normal.dot(w) / r).max(0.0);
     let cos_light = (-params.light_normal.dot(w) / r).max(0.0);
-    let irradiance = params.radiance * (params.light_area * cos_surface * cos_light / r2);
-    let shadowed: Vec3 = irradiance * v;
-    shadowed.extend(v)
+    params.radiance * (params.light_area * cos_surface * cos_light / r2)
 }

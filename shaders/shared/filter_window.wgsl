@@ -1,0 +1,59 @@
+// The discontinuity filter's window: which taps of a pixel's 5×5 window the filter averages.
+// Shared by the filter kernel and by the refinement's pixel selection (refine_select), so that
+// both see the same window; they declare `filter_params`, `values`, `depth` and `normal`.
+// CPU twin: `penumbra::filter::paired_taps`.
+
+// Mirrors `FilterParams` in `src/filter.rs`, 32 bytes; a naga test checks size and offsets.
+struct FilterParams {
+    width: u32,             // bytes 0..4: image width in pixels
+    height: u32,            // bytes 4..8: image height in pixels
+    depth_tolerance: f32,   // bytes 8..12: a neighbour is accepted when |d_n - d_c| <= depth_tolerance * d_c
+    normal_tolerance: f32,  // bytes 12..16: ... and dot(n_n, n_c) >= normal_tolerance
+    visibility_tolerance: f32,  // bytes 16..20: ... and |v_n - v_c| <= visibility_tolerance (v = values.w)
+    pad0: u32,              // bytes 20..32: unused (a uniform's size is a multiple of 16)
+    pad1: u32,
+    pad2: u32,
+}
+
+// Every tap of the window: bit (dy + 2) * 5 + (dx + 2) for dx, dy in -2..=2.
+const FULL_WINDOW: u32 = 0x1ffffffu;
+
+// The taps of the window around (x, y) the filter uses: those at a similar depth, normal and
+// unfiltered visibility whose mirror image through the centre is used too (the centre always
+// is). The centre must have a hit (depth > 0).
+fn paired_taps(x: u32, y: u32) -> u32 {
+    let c_ix = y * filter_params.width + x;
+    let d_c = depth[c_ix];
+    let n_c = normal[c_ix].xyz;
+    // Same order as the CPU twin (dy outer, dx inner, increasing).
+    var accepted = 0u;
+    for (var dy = -2; dy <= 2; dy++) {
+        let ny = i32(y) + dy;
+        if ny < 0 || ny >= i32(filter_params.height) {
+            continue;
+        }
+        for (var dx = -2; dx <= 2; dx++) {
+            let nx = i32(x) + dx;
+            if nx < 0 || nx >= i32(filter_params.width) {
+                continue;
+            }
+            let ix = u32(ny) * filter_params.width + u32(nx);
+            let d_n = depth[ix];
+            let n_n = normal[ix].xyz;
+            // Written out rather than dot() to fix the order of the products' sum.
+            let cos_nc = n_n.x * n_c.x + n_n.y * n_c.y + n_n.z * n_c.z;
+            let similar = d_n > 0.0 && abs(d_n - d_c) <= filter_params.depth_tolerance * d_c
+                && cos_nc >= filter_params.normal_tolerance
+                && abs(values[ix].w - values[c_ix].w) <= filter_params.visibility_tolerance;
+            // The centre always counts, whatever the tolerances, so weight_sum >= 1.
+            if (dx == 0 && dy == 0) || similar {
+                accepted |= 1u << u32((dy + 2) * 5 + dx + 2);
+            }
+        }
+    }
+    // Only taps whose mirror image through the centre is accepted too: the
+    // used taps stay symmetric about the pixel where a silhouette, crease,
+    // sharp shadow edge or the image border cuts the window, so the mean is
+    // not pulled towards one side (bit k's mirror is bit 24 - k).
+    return accepted & (reverseBits(accepted) >> 7u);
+}
