@@ -5,8 +5,8 @@
 #import shared/bvh
 #import shared/frame
 #import shared/intersect
-#import shared/occluded
 
+const STACK_SIZE: u32 = 64u;
 const MASK_SKY: u32 = 0x10000u;
 const WG_SIZE: u32 = 64u;
 
@@ -26,6 +26,57 @@ override RAYS_PER_PIXEL: u32 = 16u;
 @group(0) @binding(6) var<storage, read_write> state: array<u32>;
 // [0]: rays that ran out of iterations (the host reports an error).
 @group(0) @binding(7) var<storage, read_write> status: array<atomic<u32>>;
+
+var<private> stack: array<u32, 64>;
+
+// Any hit along origin + t dir, 0 < t < t_max; -1 when the budget ran out.
+fn occluded(origin: vec3<f32>, dir: vec3<f32>) -> i32 {
+    let inv_dir = safe_inverse(dir);
+    var depth = 0u;
+    if intersect_box(origin, inv_dir, nodes[0], params.t_max) >= 0.0 {
+        stack[0] = 0u;
+        depth = 1u;
+    }
+    var cursor = 0u;
+    var end = 0u;
+    var iterations = 0u;
+    // One step per iteration (a node popped, or one leaf triangle): one loop for lavapipe.
+    loop {
+        if cursor == end && depth == 0u {
+            return 0;
+        }
+        if iterations >= params.iteration_budget {
+            return -1;
+        }
+        iterations += 1u;
+        if cursor < end {
+            if intersect_triangle(triangles[cursor], origin, dir, params.t_max).x > 0.0 {
+                return 1;
+            }
+            cursor += 1u;
+            continue;
+        }
+        depth -= 1u;
+        let node = nodes[stack[depth]];
+        if node.count > 0u {
+            cursor = node.first;
+            end = node.first + node.count;
+            continue;
+        }
+        // Pushed in the CPU oracle's order, unrolled (a nested loop would count
+        // against lavapipe's iteration limit); the host checked the depth fits the stack.
+        let l = node.first;
+        if intersect_box(origin, inv_dir, nodes[l], params.t_max) >= 0.0 {
+            stack[min(depth, STACK_SIZE - 1u)] = l;
+            depth += 1u;
+        }
+        if intersect_box(origin, inv_dir, nodes[l + 1u], params.t_max) >= 0.0 {
+            stack[min(depth, STACK_SIZE - 1u)] = l + 1u;
+            depth += 1u;
+        }
+    }
+    return 0;  // not reached: the loop only returns
+}
 
 @compute @workgroup_size(WG_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
@@ -47,12 +98,19 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     }
     let interleaved = RAYS_PER_PIXEL == 16u;
     let point = select(j, ((x & 3u) + 4u * (y & 3u)) * 16u + j, interleaved);
-    let blocked = ray_blocked(texel, light_points[point].xyz);
-    if blocked < 0 {
-        atomicAdd(&status[0], 1u);
-        return;
+    let dir = light_points[point].xyz - texel.origin;
+    // Same rules as reference::shadow::initial_mask.
+    var blocked = dot(params.light_normal, texel.origin - params.light_corners[0].xyz) <= 0.0
+        || dot(texel.geo_normal, dir) <= 0.0;
+    if !blocked {
+        let hit = occluded(texel.origin, dir);
+        if hit < 0 {
+            atomicAdd(&status[0], 1u);
+            return;
+        }
+        blocked = hit == 1;
     }
-    if blocked == 1 {
+    if blocked {
         if interleaved {
             atomicOr(&masks[pixel], 1u << j);
         } else {

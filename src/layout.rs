@@ -217,6 +217,31 @@ pub struct ShadeParams {
     pub height: u32,
 }
 
+/// How the refinement lays its listed pixels out as a sample image for the shadow
+/// tracer, 16 bytes (WGSL `RefineParams` in `shaders/shared/refine.wgsl`): listed pixel
+/// `first_slot + s` becomes 4×4 tile `s` (row-major, `tiles_x` per row), each of its 16
+/// pixels a copy of the pixel's G-buffer texel, so the tile traces all 16 sample sets.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct RefineParams {
+    /// Tiles per row of the sample image, which is `4 · tiles_x` pixels wide (bytes 0..4).
+    pub tiles_x: u32,
+    /// List slot of tile 0 (bytes 4..8).
+    pub first_slot: u32,
+    /// Listed pixels in this sample image (bytes 8..12); the image is
+    /// `4 · ceil(slots / tiles_x)` pixels high.
+    pub slots: u32,
+    /// Unused (bytes 12..16).
+    pub pad: u32,
+}
+
+impl RefineParams {
+    /// Width and height of the sample image in pixels.
+    pub fn image_size(&self) -> (u32, u32) {
+        (4 * self.tiles_x, 4 * self.slots.div_ceil(self.tiles_x.max(1)))
+    }
+}
+
 /// How the embedded shadow pass reads a host's G-buffer textures, 96 bytes
 /// (WGSL `SurfaceParams` in `shaders/shared/surface.wgsl`).
 #[repr(C)]
@@ -500,6 +525,22 @@ mod tests {
                 width,
                 radiance,
                 height
+            }),
+        );
+    }
+
+    #[test]
+    fn refine_params_layout_matches_wgsl() {
+        let source = crate::shaders::assemble("shared/refine", &[]).expect("refine module assembles");
+        check(
+            &source,
+            "RefineParams",
+            size_of::<RefineParams>(),
+            fields!(RefineParams {
+                tiles_x,
+                first_slot,
+                slots,
+                pad
             }),
         );
     }

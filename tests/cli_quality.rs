@@ -51,7 +51,7 @@ fn quality_reports_every_method_on_the_generated_scenes() {
         let rmse = |i: usize| methods[i]["rmse"].as_f64().unwrap();
         let rays = |i: usize| methods[i]["rays_per_pixel"].as_f64().unwrap();
         assert_eq!([rays(0), rays(1), rays(3), rays(4)], [16.0, 16.0, 64.0, 256.0]);
-        // The refinement adds 240 rays at some, not all, pixels; and lowers the error.
+        // The refinement adds 256 rays at some, not all, pixels; and lowers the error.
         assert!(rays(2) > 16.0 && rays(2) < 256.0, "{scene}: {}", rays(2));
         assert!(rmse(2) < rmse(0), "{scene}: {stdout}");
         for (i, name) in names.iter().enumerate() {

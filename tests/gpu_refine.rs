@@ -57,8 +57,27 @@ fn cpu_refined(frame: &Frame, bvh: &Bvh, view: &penumbra::view::View) -> (Vec<[f
 fn refinement_matches_cpu_twin() {
     let start = Instant::now();
     let (w, h) = (64, 48);
-    let renderer = Renderer::new(ctx(), None).unwrap();
-    for s in assets::EMBEDDED_SCENES {
+    // The refinement traces its sample images with the frame's own tracer.
+    let renderers: Vec<Renderer> = [Tracer::Mft, Tracer::Packet, Tracer::PerRay]
+        .into_iter()
+        .map(|tracer| {
+            Renderer::new(
+                ctx(),
+                RendererOptions {
+                    tracer,
+                    ..RendererOptions::default()
+                },
+            )
+            .unwrap()
+        })
+        .collect();
+    // Every tracer on the playground, the multi-frusta one on the lattice too (the
+    // lattice's deep penumbrae make the baselines slow on lavapipe).
+    let runs = renderers
+        .iter()
+        .map(|r| (&assets::EMBEDDED_SCENES[0], r))
+        .chain(assets::EMBEDDED_SCENES[1..].iter().map(|s| (s, &renderers[0])));
+    for (s, renderer) in runs {
         let (scene, view) = embedded(s.name);
         let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
         let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
@@ -69,8 +88,9 @@ fn refinement_matches_cpu_twin() {
         let refined = frame.refined.iter().filter(|&&r| r).count();
         let geometry = frame.masks.iter().filter(|&&m| m & MASK_SKY == 0).count();
         eprintln!(
-            "{}: {refined} of {geometry} pixels with geometry refined; GPU refine {:.1} ms",
+            "{} ({}): {refined} of {geometry} pixels with geometry refined; GPU refine {:.1} ms",
             s.name,
+            renderer.tracer(),
             frame.pass_ms("refine")
         );
         assert_eq!(frame.refined, cpu_refined, "{}: refined pixels differ", s.name);

@@ -68,8 +68,8 @@ struct MethodResult {
     method: String,
     /// GPU milliseconds of its shadow pass plus its filter and refinement.
     gpu_ms: f64,
-    /// Shadow rays per pixel with geometry, on average (refinement: 16 + 240 × the
-    /// share of those pixels it refined).
+    /// Shadow rays per pixel with geometry, on average (refinement: 16 + 256 × the
+    /// share of those pixels it refined, which trace their own 16 again).
     rays_per_pixel: f64,
     rmse: f64,
     mean_abs: f64,
@@ -170,7 +170,7 @@ pub fn run(args: &QualityArgs) -> Result<()> {
         "mft-16-refined".into(),
         refined.filtered.iter().map(|v| v[3]).collect(),
         refined.pass_ms("shadow") + refined.pass_ms("filter") + refined.pass_ms("refine"),
-        16.0 + 240.0 * refined_share,
+        16.0 + 256.0 * refined_share,
     ));
     settings.filter = None;
     settings.keep_gbuffer = false;

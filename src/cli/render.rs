@@ -6,8 +6,8 @@ use std::time::Instant;
 use penumbra::bvh::Bvh;
 use penumbra::filter::FilterParams;
 use penumbra::gpu::{
-    FrameSettings, GpuContext, GpuOptions, GpuScene, LeafMode, PrimaryTracer, Renderer, RendererOptions,
-    Tracer, VectorVariant,
+    FrameSettings, GpuContext, GpuOptions, GpuScene, LeafMode, Phase, PrimaryTracer, Renderer,
+    RendererOptions, Tracer, VectorVariant,
 };
 use penumbra::output::{FloatImage, HdrImage, ToneMap, write_float_image, write_image};
 use penumbra::reference::shadow::MASK_SKY;
@@ -293,12 +293,17 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let unit = tracer.unit();
     let rays_per_pixel = f64::from(tracer.rays_per_pixel());
     let start = Instant::now();
-    let frame = renderer.render_with_progress(&ctx, &gpu_scene, &view, &settings, &mut |done, total| {
-        progress!(
-            "\rshadow    {done}/{total} {}   ",
-            if unit == 4 { "tiles of 4x4" } else { "pixels" }
-        );
-    })?;
+    let frame =
+        renderer.render_with_phases(&ctx, &gpu_scene, &view, &settings, &mut |phase, done, total| {
+            let name = match phase {
+                Phase::Shadow => "shadow",
+                Phase::Refine => "refine",
+            };
+            progress!(
+                "\r{name}    {done}/{total} {}   ",
+                if unit == 4 { "tiles of 4x4" } else { "pixels" }
+            );
+        })?;
     progress!("\r{:60}\r", "");
     let wall = start.elapsed().as_secs_f64();
 
@@ -314,7 +319,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.refine {
         let refined = frame.refined.iter().filter(|&&r| r).count();
         println!(
-            "refine    {:>9.2} ms GPU: {refined} px ({:.1} % of those with geometry) traced 240 more rays",
+            "refine    {:>9.2} ms GPU: {refined} px ({:.1} % of those with geometry) traced all 256 rays",
             frame.pass_ms("refine"),
             100.0 * refined as f64 / hits.max(1.0)
         );

@@ -29,7 +29,7 @@ pub use context::{ADAPTER_ENV, AdapterSummary, GpuContext, GpuOptions};
 pub use embed::{ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, SurfaceInput, VISIBILITY_FORMAT};
 pub use motion::{MotionSettings, MotionUpdate};
 pub use primary_pass::{PrimaryPass, PrimaryStatus, PrimaryTracer};
-pub use render::{Frame, FrameSettings, Renderer, RendererOptions};
+pub use render::{Frame, FrameSettings, Phase, Renderer, RendererOptions};
 pub use scene_buffers::{GpuScene, validate_for_gpu};
 pub use shadow_tracer::{LeafMode, ShadowScratch, ShadowStats, ShadowTracer, TracerOptions, VectorVariant};
 pub use timer::GpuTimer;

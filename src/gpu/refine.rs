@@ -1,23 +1,37 @@
 //! The refinement pass: after the filter, the pixels whose filter window is cut and whose
-//! visibility changes around them trace the 240 rays of the other 15 sample sets, and
-//! their filtered value becomes the 256-ray one (see [`crate::reference::refine`], the
-//! CPU twin, for why and which pixels).
+//! visibility changes around them get all 256 light samples, and their filtered value
+//! becomes the 256-ray one (see [`crate::reference::refine`], the CPU twin, for why and
+//! which pixels).
 //!
-//! Two kernels: `refine_select` lists the pixels (one invocation per pixel), the host reads
-//! how many, then `refine_trace` runs one 240-invocation workgroup per listed pixel, one
-//! ray per invocation (lavapipe bounds the iterations of one invocation's loops, so 240
-//! rays in one invocation could hit its limit).
+//! Three kernels and the frame's own shadow tracer: `refine_select` lists the pixels (one
+//! invocation per pixel); the host reads how many; per chunk of the list, `refine_gather`
+//! builds a *sample image* in which each listed pixel is a 4×4 tile of copies of its
+//! G-buffer texel (so the tile's 16 pixels trace the 16 sample sets), the shadow tracer
+//! (multi-frusta, packet or per-ray, as for the frame) traces it like any image, and
+//! `refine_resolve` sums each tile's 16 masks into its pixel's value. The multi-frusta
+//! kernel then traces a pixel's 256 rays as one vector of 16 frusta that share their
+//! origin, and its masks are the oracle's, as for every frame.
 
-use super::kernel::{Binding, Checks, Kernel};
+use super::kernel::{Binding, Checks, Kernel, uniform_buffer};
+use super::shadow_tracer::ShadowTracer;
 use super::{GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer};
+use crate::layout::{GBufferTexel, RefineParams, ShadowParams};
+use crate::sampling::SETS;
 use crate::{Error, Result};
+
+/// Tiles per row of a sample image (1,024 pixels wide): wide enough that the shadow
+/// tracer's chunks of 128×128 tiles are full, narrow enough that a short list wastes
+/// little of its last row.
+const SAMPLE_TILES_X: u32 = 256;
 
 /// The buffers of one frame (or tile) the refinement reads and writes.
 pub struct RefineBuffers<'a> {
+    /// Width and height of the frame in pixels.
+    pub size: (u32, u32),
     /// `FilterParams` uniform of the frame's filter (same tolerances: same window).
     pub filter_params: &'a wgpu::Buffer,
-    /// `ShadowParams` uniform of the frame's shadow pass (light, `t_max`, width).
-    pub shadow_params: &'a wgpu::Buffer,
+    /// The frame's `ShadowParams` (light, `t_max`, budget); its size fields are replaced.
+    pub shadow_params: &'a ShadowParams,
     /// `ShadeParams` uniform of the frame's shade pass.
     pub shade_params: &'a wgpu::Buffer,
     /// The shade pass's outputs, the filter's inputs.
@@ -30,60 +44,50 @@ pub struct RefineBuffers<'a> {
     pub gbuffer: &'a wgpu::Buffer,
     /// The 256 interleaved light points, set order.
     pub light_points: &'a wgpu::Buffer,
-    /// The shadow pass's masks (16 ray bits per pixel).
-    pub masks: &'a wgpu::Buffer,
     /// The filter's output, overwritten at the refined pixels.
     pub filtered: &'a wgpu::Buffer,
 }
 
-/// The refinement's two pipelines.
+/// The refinement's three pipelines (the tracer is the frame's).
 #[derive(Debug)]
 pub struct Refinement {
     select: Kernel,
-    trace: Kernel,
+    gather: Kernel,
+    resolve: Kernel,
 }
 
 impl Refinement {
-    /// Builds both pipelines.
+    /// Builds the pipelines.
     pub fn new(ctx: &GpuContext) -> Result<Refinement> {
         use Binding::*;
+        let kernel = |name, bindings: &[Binding]| Kernel::new(ctx, name, &[], bindings, &[], Checks::Checked);
         Ok(Refinement {
-            select: Kernel::new(
-                ctx,
+            select: kernel(
                 "refine_select",
-                &[],
                 &[Uniform, ReadOnly, ReadOnly, ReadOnly, ReadWrite],
-                &[],
-                Checks::Checked,
             )?,
-            // Unchecked like the per-ray shadow kernel: node and triangle indices come from
-            // the validated BVH, the stack index is clamped, list slots are below the count
-            // the kernel reads (at most one per pixel, and the list has a word per pixel),
-            // listed pixels are below width × height and light points below 256.
-            trace: Kernel::new(
-                ctx,
-                "refine_trace",
-                &[],
-                &[
-                    Uniform, ReadOnly, ReadOnly, ReadOnly, ReadOnly, ReadOnly, Uniform, ReadWrite, ReadWrite,
-                ],
-                &[],
-                Checks::Unchecked,
+            gather: kernel("refine_gather", &[Uniform, ReadOnly, ReadOnly, ReadWrite])?,
+            resolve: kernel(
+                "refine_resolve",
+                &[Uniform, Uniform, ReadOnly, ReadOnly, ReadOnly, ReadWrite],
             )?,
         })
     }
 
-    /// Refines a `width × height` frame whose filter has been submitted: lists the pixels,
-    /// traces their other 240 rays, overwrites their filtered values. Returns the listed
-    /// pixel indices (row-major), sorted. Both dispatches are timed as `refine`.
+    /// Refines the frame of `b` (its filter submitted), tracing with
+    /// `tracer`. Returns the refined pixels' indices (row-major), sorted. Every dispatch,
+    /// the tracer's included, is timed as `refine`; `progress` gets the tracer's progress
+    /// over each chunk's sample image.
     pub fn run(
         &self,
         ctx: &GpuContext,
         scene: &GpuScene,
+        tracer: &ShadowTracer,
         b: &RefineBuffers<'_>,
-        (width, height): (u32, u32),
         timer: &mut GpuTimer,
+        progress: &mut dyn FnMut(u64, u64),
     ) -> Result<Vec<u32>> {
+        let (width, height) = b.size;
         let pixels = u64::from(width) * u64::from(height);
         let rw = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
         let list = empty_storage_buffer(ctx, "refine list", (2 + pixels) * 4, rw)?;
@@ -93,57 +97,100 @@ impl Refinement {
             .select
             .bind(ctx, &[b.filter_params, b.values, b.depth, b.normal, &list]);
         let writes = timer.pass_writes("refine");
-        self.select.record(
-            &mut encoder,
-            "refine select",
-            &bind,
-            writes,
-            (width.div_ceil(8), height.div_ceil(8)),
-        );
+        let groups = (width.div_ceil(8), height.div_ceil(8));
+        self.select
+            .record(&mut encoder, "refine select", &bind, writes, groups);
         ctx.queue.submit([encoder.finish()]);
         let listed = read_buffer::<u32>(ctx, &list, 0..4)?[0];
-        if listed == 0 {
-            return Ok(Vec::new());
-        }
 
-        // One workgroup per listed pixel, as a 2D grid within the per-dimension limit.
-        let limit = ctx.info.max_compute_workgroups_per_dimension;
-        let groups_x = listed.min(limit);
-        let groups = (groups_x, listed.div_ceil(groups_x));
-        if groups.1 > limit {
+        // Chunks whose sample image (16 texels per listed pixel) fits one storage binding.
+        let texel = size_of::<GBufferTexel>() as u64;
+        let tiles_x = SAMPLE_TILES_X.min(listed.max(1));
+        let fit = ctx.info.max_storage_buffer_binding_size / (SETS as u64 * texel);
+        // The resolve dispatch has one invocation per slot, 64 per workgroup, along x.
+        let fit = fit.min(u64::from(ctx.info.max_compute_workgroups_per_dimension) * 64);
+        let chunk = (fit.min(u64::from(listed)) as u32 / tiles_x * tiles_x).max(tiles_x);
+        if u64::from(tiles_x) > fit {
             return Err(Error::Gpu(format!(
-                "refinement of {listed} pixels needs {}x{} workgroups; the device allows {limit} per dimension",
-                groups.0, groups.1
+                "refinement: a sample image row of {tiles_x} pixels does not fit one storage buffer"
             )));
         }
-        let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        let bind = self.trace.bind(
-            ctx,
-            &[
-                b.shadow_params,
-                &scene.nodes,
-                &scene.triangles,
-                b.gbuffer,
-                b.light_points,
-                b.masks,
-                b.shade_params,
-                &list,
-                b.filtered,
-            ],
-        );
-        let writes = timer.pass_writes("refine");
-        self.trace
-            .record(&mut encoder, "refine trace", &bind, writes, groups);
-        ctx.queue.submit([encoder.finish()]);
-        let words = read_buffer::<u32>(ctx, &list, 0..(2 + u64::from(listed)) * 4)?;
-        if words[1] > 0 {
-            return Err(Error::Gpu(format!(
-                "refinement: {} shadow rays ran out of their loop iterations",
-                words[1]
-            )));
+        for first_slot in (0..listed).step_by(chunk as usize) {
+            let params = RefineParams {
+                tiles_x,
+                first_slot,
+                slots: chunk.min(listed - first_slot),
+                pad: 0,
+            };
+            self.trace_chunk(ctx, scene, tracer, b, &list, &params, timer, progress)?;
         }
-        let mut refined = words[2..].to_vec();
+        let mut refined = read_buffer::<u32>(ctx, &list, 8..(2 + u64::from(listed)) * 4)?;
         refined.sort_unstable();
         Ok(refined)
+    }
+
+    /// Gathers, traces and resolves the sample image of one chunk of the list.
+    #[allow(clippy::too_many_arguments)]
+    fn trace_chunk(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        tracer: &ShadowTracer,
+        b: &RefineBuffers<'_>,
+        list: &wgpu::Buffer,
+        params: &RefineParams,
+        timer: &mut GpuTimer,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<()> {
+        let (w, h) = params.image_size();
+        let n = u64::from(w) * u64::from(h);
+        let texel = size_of::<GBufferTexel>() as u64;
+        let usage = wgpu::BufferUsages::COPY_DST;
+        let samples = empty_storage_buffer(ctx, "refine sample image", n * texel, usage)?;
+        let masks = empty_storage_buffer(ctx, "refine sample masks", n * 4, usage)?;
+        let params_buf = uniform_buffer(ctx, "refine params", params);
+
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        let bind = self.gather.bind(ctx, &[&params_buf, b.gbuffer, list, &samples]);
+        let writes = timer.pass_writes("refine");
+        let groups = (w.div_ceil(8), h.div_ceil(8));
+        self.gather
+            .record(&mut encoder, "refine gather", &bind, writes, groups);
+        ctx.queue.submit([encoder.finish()]);
+
+        let shadow = ShadowParams {
+            width: w,
+            height: h,
+            tiles_x: w.div_ceil(4),
+            tiles_y: h.div_ceil(4),
+            ..*b.shadow_params
+        };
+        tracer.run_timed_as(
+            ctx,
+            scene,
+            &samples,
+            b.light_points,
+            &masks,
+            &shadow,
+            Some(timer),
+            "refine",
+            progress,
+        )?;
+
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        let bind = self.resolve.bind(
+            ctx,
+            &[&params_buf, b.shade_params, b.gbuffer, list, &masks, b.filtered],
+        );
+        let writes = timer.pass_writes("refine");
+        self.resolve.record(
+            &mut encoder,
+            "refine resolve",
+            &bind,
+            writes,
+            (params.slots.div_ceil(64), 1),
+        );
+        ctx.queue.submit([encoder.finish()]);
+        Ok(())
     }
 }

@@ -113,6 +113,15 @@ impl Frame {
     }
 }
 
+/// What a frame's progress report is about ([`Renderer::render_with_phases`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Phase {
+    /// The shadow pass, in tiles (or pixels, for the per-ray tracers) of the image.
+    Shadow,
+    /// The refinement's tracing, in units of its sample image.
+    Refine,
+}
+
 /// How the renderer builds its shadow pass.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RendererOptions {
@@ -264,11 +273,6 @@ impl Renderer {
     }
 
     /// [`Renderer::render`], calling `progress(tiles done, tiles)` as the shadow pass advances.
-    ///
-    /// An image whose per-pixel buffers would not fit one storage-buffer binding is
-    /// rendered in square tiles (sides a multiple of 4, so every pixel keeps its sample
-    /// set) with a 4-pixel margin for the filter, and stitched: the same pixels as one
-    /// big frame, bit for bit. Sides up to the device's 2D texture limit are accepted.
     pub fn render_with_progress(
         &self,
         ctx: &GpuContext,
@@ -276,6 +280,29 @@ impl Renderer {
         view: &View,
         settings: &FrameSettings,
         progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<Frame> {
+        self.render_with_phases(ctx, scene, view, settings, &mut |phase, done, total| {
+            if phase == Phase::Shadow {
+                progress(done, total)
+            }
+        })
+    }
+
+    /// [`Renderer::render`], calling `progress(phase, done, total)` as the shadow pass
+    /// ([`Phase::Shadow`]: tiles of the image) and the refinement ([`Phase::Refine`]: tiles
+    /// of its sample image, for each tile of a tiled image) advance.
+    ///
+    /// An image whose per-pixel buffers would not fit one storage-buffer binding is
+    /// rendered in square tiles (sides a multiple of 4, so every pixel keeps its sample
+    /// set) with a 4-pixel margin for the filter, and stitched: the same pixels as one
+    /// big frame, bit for bit. Sides up to the device's 2D texture limit are accepted.
+    pub fn render_with_phases(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        view: &View,
+        settings: &FrameSettings,
+        progress: &mut dyn FnMut(Phase, u64, u64),
     ) -> Result<Frame> {
         let (w, h) = (settings.width, settings.height);
         if w == 0 || h == 0 {
@@ -322,9 +349,18 @@ impl Renderer {
                 ..*settings
             };
             let camera = tile_camera(&whole, r.x, r.y, r.w, r.h);
-            let tile = self.render_tile(ctx, scene, view, &tile_settings, &camera, &mut |d, _| {
-                progress(done + d, total)
-            })?;
+            let tile =
+                self.render_tile(
+                    ctx,
+                    scene,
+                    view,
+                    &tile_settings,
+                    &camera,
+                    &mut |phase, d, t| match phase {
+                        Phase::Shadow => progress(phase, done + d, total),
+                        Phase::Refine => progress(phase, d, t),
+                    },
+                )?;
             done += units(r);
             let frame = out.get_or_insert_with(|| Frame::empty(w, h, settings.keep_gbuffer));
             frame.paste(&tile, r);
@@ -340,7 +376,7 @@ impl Renderer {
         view: &View,
         settings: &FrameSettings,
         camera: &CameraParams,
-        progress: &mut dyn FnMut(u64, u64),
+        progress: &mut dyn FnMut(Phase, u64, u64),
     ) -> Result<Frame> {
         let (w, h) = (settings.width, settings.height);
         // Tiles are sized to fit; this catches a forced `max_tile` that does not.
@@ -408,7 +444,7 @@ impl Renderer {
             &masks,
             &shadow_params(&view.light, w, h),
             Some(&mut timer),
-            progress,
+            &mut |done, total| progress(Phase::Shadow, done, total),
         )?;
 
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
@@ -442,20 +478,28 @@ impl Renderer {
                     self.refinement.get_or_init(|| built)
                 }
             };
-            let shadow_buf = uniform_buffer(ctx, "shadow params", &shadow_params(&view.light, w, h));
+            let shadow = shadow_params(&view.light, w, h);
             let buffers = RefineBuffers {
+                size: (w, h),
                 filter_params,
-                shadow_params: &shadow_buf,
+                shadow_params: &shadow,
                 shade_params: &shade_buf,
                 values: &values,
                 depth: &depth,
                 normal: &normal,
                 gbuffer: &gbuffer,
                 light_points: &light_points,
-                masks: &masks,
                 filtered: &filtered,
             };
-            for p in refinement.run(ctx, scene, &buffers, (w, h), &mut timer)? {
+            let mut refine_progress = |done, total| progress(Phase::Refine, done, total);
+            for p in refinement.run(
+                ctx,
+                scene,
+                &self.shadow,
+                &buffers,
+                &mut timer,
+                &mut refine_progress,
+            )? {
                 refined[p as usize] = true;
             }
         }

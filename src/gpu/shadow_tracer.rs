@@ -310,7 +310,35 @@ impl ShadowTracer {
         light_points: &wgpu::Buffer,
         masks: &wgpu::Buffer,
         params: &ShadowParams,
+        timer: Option<&mut GpuTimer>,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<ShadowStats> {
+        self.run_timed_as(
+            ctx,
+            scene,
+            gbuffer,
+            light_points,
+            masks,
+            params,
+            timer,
+            "shadow",
+            progress,
+        )
+    }
+
+    /// [`ShadowTracer::run`] with its dispatches timed as `label` (the refinement traces
+    /// its sample images with the frame's tracer, timed as `refine`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn run_timed_as(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        gbuffer: &wgpu::Buffer,
+        light_points: &wgpu::Buffer,
+        masks: &wgpu::Buffer,
+        params: &ShadowParams,
         mut timer: Option<&mut GpuTimer>,
+        label: &str,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<ShadowStats> {
         let unit = self.tracer.unit();
@@ -369,7 +397,7 @@ impl ShadowTracer {
                 ctx.queue.write_buffer(&params_buf, 0, bytemuck::bytes_of(&p));
                 let mut encoder = ctx.device.create_command_encoder(&Default::default());
                 encoder.clear_buffer(&status, 0, None);
-                let writes = timer.as_deref_mut().and_then(|t| t.pass_writes("shadow"));
+                let writes = timer.as_deref_mut().and_then(|t| t.pass_writes(label));
                 self.kernel
                     .record(&mut encoder, "shadow/trace", &bind, writes, groups);
                 ctx.queue.submit([encoder.finish()]);

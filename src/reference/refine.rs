@@ -1,6 +1,7 @@
-//! CPU twin of the refinement (`shaders/refine_select.wgsl`, `shaders/refine_trace.wgsl`):
-//! where the discontinuity filter cannot average the 16 sample sets of its window, the
-//! pixel traces the 240 rays of the other 15 sets itself.
+//! CPU twin of the refinement (`shaders/refine_select.wgsl`, `refine_gather.wgsl`,
+//! `refine_resolve.wgsl`, with the frame's shadow tracer between the last two): where the
+//! discontinuity filter cannot average the 16 sample sets of its window, the pixel traces
+//! all 256 light samples itself.
 //!
 //! The filter turns 16 rays per pixel into ~256 only where its window is whole. Where a
 //! silhouette, a crease, a sharp shadow edge or the image border cuts it, the filter keeps
@@ -10,17 +11,18 @@
 //! visibility is not the same all around it (the centre is partly lit, or a neighbour with
 //! geometry has another visibility): a cut window in a uniformly lit or shadowed region
 //! needs no more rays. The refined value replaces the filtered one:
-//! `irradiance · (256 − blocked) / 256` over the whole interleaved pattern — the pixel's
-//! own 16 rays (its shadow mask) and the other 240 traced alone.
+//! `irradiance · (256 − blocked) / 256` over the whole interleaved pattern. (The GPU
+//! traces all 16 sets, its own again, as one 4×4 tile of a sample image; the twin takes
+//! the own set's rays from the frame's mask, which is the same.)
 
 use glam::{Vec3, Vec4};
 
 use crate::bvh::Bvh;
 use crate::filter::{FULL_WINDOW, FilterParams, paired_taps};
-use crate::layout::{GBufferTexel, ShadeParams, ShadowParams};
+use crate::layout::{GBufferTexel, RefineParams, ShadeParams, ShadowParams};
 use crate::reference::shade::unshadowed_irradiance;
-use crate::reference::shadow::{MASK_FULL, ray_blocked};
-use crate::sampling::{SAMPLES, SAMPLES_PER_SET, SETS, pixel_set};
+use crate::reference::shadow::{MASK_FULL, per_ray_mask};
+use crate::sampling::{SAMPLES, SETS, pixel_set};
 
 /// Whether pixel `(x, y)` is refined (the filter's inputs as for
 /// [`crate::filter::filter_pixel`]): it has geometry, the filter's window around it is
@@ -58,7 +60,9 @@ fn visibility_varies(params: &FilterParams, values: &[[f32; 4]], depth: &[f32], 
 
 /// The refined `(irradiance rgb, visibility)` of pixel `(x, y)`: its own set's rays
 /// from `mask` (bit j = ray j blocked) and the other 15 sets' rays traced alone, over
-/// all 256 `light_points` (set order, [`crate::sampling::light_points`]).
+/// all 256 `light_points` (set order, [`crate::sampling::light_points`]). The oracle for
+/// the GPU's gather, trace and resolve together: the shadow tracers' masks are the
+/// per-ray oracle's, so a sample image's 16 masks count the same rays.
 #[allow(clippy::too_many_arguments)] // the kernel's inputs, one each
 pub fn refined_value(
     bvh: &Bvh,
@@ -71,14 +75,14 @@ pub fn refined_value(
     shade: &ShadeParams,
 ) -> Vec4 {
     let own = pixel_set(x, y);
-    let others = (1..SETS).flat_map(|k| {
-        let set = (own + k) % SETS;
-        light_points[set * SAMPLES_PER_SET..(set + 1) * SAMPLES_PER_SET].iter()
+    let tile: [u32; SETS] = std::array::from_fn(|set| {
+        if set == own {
+            mask
+        } else {
+            per_ray_mask(bvh, texel, set, light_points, shadow)
+        }
     });
-    let blocked = (mask & MASK_FULL).count_ones() as usize
-        + others.filter(|&&p| ray_blocked(bvh, texel, p, shadow)).count();
-    let visibility = (SAMPLES - blocked) as f32 / SAMPLES as f32;
-    (unshadowed_irradiance(shade, texel) * visibility).extend(visibility)
+    resolve(texel, &tile, shade)
 }
 
 /// The refinement of a whole filtered image: every pixel [`needs_refinement`] picks gets its
@@ -111,4 +115,141 @@ pub fn refine_image(
         }
     }
     refined
+}
+
+/// The sample image `refine_gather` builds for `params` (row-major,
+/// [`RefineParams::image_size`]): tile `s` is `tiles_x`-wide row-major, its 16 pixels
+/// copies of `gbuffer[list[first_slot + s]]`; tiles past `slots` are sky (no hit).
+pub fn sample_image(gbuffer: &[GBufferTexel], list: &[u32], params: &RefineParams) -> Vec<GBufferTexel> {
+    let (w, h) = params.image_size();
+    let sky = GBufferTexel {
+        triangle: u32::MAX,
+        ..GBufferTexel::default()
+    };
+    (0..h)
+        .flat_map(|y| (0..w).map(move |x| (y / 4) * params.tiles_x + x / 4))
+        .map(|slot| {
+            if slot < params.slots {
+                gbuffer[list[(params.first_slot + slot) as usize] as usize]
+            } else {
+                sky
+            }
+        })
+        .collect()
+}
+
+/// What `refine_resolve` writes for a pixel with G-buffer `texel` whose sample-image tile
+/// has the masks `tile` (its 16 sets): the irradiance times the fraction of the 256 rays
+/// that reach the light, and that fraction.
+pub fn resolve(texel: &GBufferTexel, tile: &[u32; SETS], shade: &ShadeParams) -> Vec4 {
+    let blocked: u32 = tile.iter().map(|m| (m & MASK_FULL).count_ones()).sum();
+    let visibility = (SAMPLES as u32 - blocked) as f32 / SAMPLES as f32;
+    (unshadowed_irradiance(shade, texel) * visibility).extend(visibility)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    /// The filter's inputs: params, values, depth, normal.
+    type Image = (FilterParams, Vec<[f32; 4]>, Vec<f32>, Vec<[f32; 3]>);
+
+    /// A flat `w × h` image facing the camera, unfiltered visibility `v(x, y)`.
+    fn image(w: u32, h: u32, v: impl Fn(u32, u32) -> f32) -> Image {
+        let values = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .map(|(x, y)| [0.0, 0.0, 0.0, v(x, y)]);
+        let n = (w * h) as usize;
+        (
+            FilterParams::new(w, h),
+            values.collect(),
+            vec![2.0; n],
+            vec![[0.0, 0.0, 1.0]; n],
+        )
+    }
+
+    #[test]
+    fn refines_where_the_window_is_cut_and_visibility_changes() {
+        // A sharp shadow edge at x = 6: the visibility test cuts the windows beside it.
+        let (p, values, depth, normal) = image(12, 12, |x, _| if x < 6 { 0.0 } else { 1.0 });
+        let refined = |x, y| needs_refinement(&p, &values, &depth, &normal, x, y);
+        assert!(refined(5, 6) && refined(6, 6) && refined(4, 6) && refined(7, 6));
+        // Two pixels from the edge the window is whole (it reaches x + 2 only).
+        assert!(!refined(3, 6) && !refined(8, 6));
+        // At the image border the window is cut, but nothing changes there.
+        assert!(!refined(0, 6) && !refined(11, 0));
+
+        // Uniform penumbra (0.5 everywhere): whole windows inside, cut windows at the
+        // border, where the pixel is partly lit: refined.
+        let (p, values, depth, normal) = image(12, 12, |_, _| 0.5);
+        assert!(!needs_refinement(&p, &values, &depth, &normal, 6, 6));
+        assert!(needs_refinement(&p, &values, &depth, &normal, 0, 6));
+
+        // A pixel without geometry is never refined; a silhouette cuts the window.
+        let (p, values, mut depth, normal) = image(12, 12, |x, _| if x < 6 { 0.25 } else { 0.5 });
+        depth[6 * 12 + 3] = 0.0;
+        assert!(!needs_refinement(&p, &values, &depth, &normal, 3, 6));
+        assert!(needs_refinement(&p, &values, &depth, &normal, 2, 6));
+    }
+
+    #[test]
+    fn sample_image_tiles_hold_copies_of_the_listed_texels() {
+        let texel = |i: u32| GBufferTexel {
+            origin: Vec3::splat(i as f32),
+            depth: 1.0,
+            triangle: i,
+            ..GBufferTexel::default()
+        };
+        let gbuffer: Vec<GBufferTexel> = (0..10).map(texel).collect();
+        let list = [7, 2, 9, 4, 0];
+        let params = RefineParams {
+            tiles_x: 2,
+            first_slot: 1,
+            slots: 3,
+            pad: 0,
+        };
+        assert_eq!(params.image_size(), (8, 8));
+        let image = sample_image(&gbuffer, &list, &params);
+        for y in 0..8 {
+            for x in 0..8 {
+                let slot = (y / 4) * 2 + x / 4;
+                let t = image[(y * 8 + x) as usize];
+                match slot {
+                    0 => assert_eq!(t.triangle, 2),
+                    1 => assert_eq!(t.triangle, 9),
+                    2 => assert_eq!(t.triangle, 4),
+                    _ => assert!(!t.is_hit(), "({x}, {y}) past the last slot is sky"),
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn resolve_counts_the_256_rays() {
+        let shade = ShadeParams {
+            light_center: Vec3::new(0.0, 10.0, 0.0),
+            light_area: 1.0,
+            light_normal: Vec3::NEG_Y,
+            width: 1,
+            radiance: Vec3::ONE,
+            height: 1,
+        };
+        let texel = GBufferTexel {
+            normal: Vec3::Y,
+            depth: 1.0,
+            ..GBufferTexel::default()
+        };
+        let mut tile = [0u32; SETS];
+        tile[0] = 0xffff;
+        tile[3] = 0b1011 | (1 << 16); // bits above the 16 rays do not count
+        let v = resolve(&texel, &tile, &shade);
+        assert_eq!(v.w, (256.0 - 19.0) / 256.0);
+        let lit = unshadowed_irradiance(&shade, &texel);
+        assert_eq!(v.truncate(), lit * v.w);
+        assert!(
+            (lit.x - 0.01).abs() < 1e-6,
+            "area 1 at distance 10, both cosines 1: {lit}"
+        );
+    }
 }

@@ -115,16 +115,6 @@ pub fn per_ray_mask(
     mask
 }
 
-/// Whether the ray from `texel`'s shadow-ray origin to `point` is blocked, by the
-/// same rules as [`initial_mask`] (a pixel behind the light, a point below the
-/// tangent plane) and then by a triangle (WGSL `ray_blocked` in `shared/occluded`).
-pub fn ray_blocked(bvh: &Bvh, texel: &GBufferTexel, point: Vec3, params: &ShadowParams) -> bool {
-    let d = point - texel.origin;
-    !faces_light(params, texel.origin)
-        || texel.geo_normal.dot(d) <= 0.0
-        || any_hit(bvh, texel.origin, d, params.t_max)
-}
-
 /// Occlusion masks of a whole G-buffer (row-major), rows spread over all cores.
 pub fn per_ray_masks(
     bvh: &Bvh,

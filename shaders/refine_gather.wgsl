@@ -1,0 +1,34 @@
+// Refinement, step 2 of 3: builds the sample image of a chunk of the pixels refine_select
+// listed (shared/refine: one 4×4 tile of copies of the pixel's G-buffer texel per pixel),
+// which the frame's own shadow tracer then traces like any image (step 3 is refine_resolve).
+// Tiles past the chunk's last slot get sky texels (no rays).
+// Dispatched by the renderer, ceil(width/8) × ceil(height/8) workgroups over the sample image.
+// CPU twin: penumbra::reference::refine::sample_image.
+
+#import shared/frame
+#import shared/refine
+
+const WG_SIZE: u32 = 8u;
+
+@group(0) @binding(0) var<uniform> params: RefineParams;
+@group(0) @binding(1) var<storage, read> gbuffer: array<GBufferTexel>;
+// As refine_select left it: [0] pixels listed, [2 + i] the i-th pixel's index.
+@group(0) @binding(2) var<storage, read> list: array<u32>;
+// The sample image, 4 tiles_x wide, row-major.
+@group(0) @binding(3) var<storage, read_write> samples: array<GBufferTexel>;
+
+@compute @workgroup_size(WG_SIZE, WG_SIZE)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let width = 4u * params.tiles_x;
+    let height = 4u * ((params.slots + params.tiles_x - 1u) / params.tiles_x);
+    if gid.x >= width || gid.y >= height {
+        return;
+    }
+    let slot = (gid.y / 4u) * params.tiles_x + gid.x / 4u;
+    var texel = GBufferTexel();
+    texel.triangle = 0xffffffffu;
+    if slot < params.slots {
+        texel = gbuffer[list[2u + params.first_slot + slot]];
+    }
+    samples[gid.y * width + gid.x] = texel;
+}
