@@ -1,7 +1,8 @@
-// Refinement, step 1 of 2: lists the pixels the discontinuity filter cannot help, those whose
-// window is cut (a silhouette, a crease, a sharp shadow edge, the image border: the filter
-// averages fewer than the 16 sample sets there) while visibility changes at or around the
-// pixel, so that refine_trace gives each of them all 256 light samples.
+// Refinement, step 1 of 3: lists the pixels the discontinuity filter cannot serve: those whose
+// unfiltered visibility changes at or around them and whose window is cut (a silhouette, a
+// crease, a sharp shadow edge, the image border: the filter averages fewer than the 16 sample
+// sets there) or whose own 16 rays agree (the window would blur a penumbra's edge into them).
+// refine_gather, the shadow tracer and refine_resolve then give each of them all 256 samples.
 // Dispatched by the renderer after the filter, ceil(width/8) × ceil(height/8) workgroups.
 // CPU twin: penumbra::reference::refine::needs_refinement.
 
@@ -50,7 +51,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let pixel = gid.y * filter_params.width + gid.x;
-    if depth[pixel] <= 0.0 || paired_taps(gid.x, gid.y) == FULL_WINDOW || !visibility_varies(gid.x, gid.y) {
+    if depth[pixel] <= 0.0 || !visibility_varies(gid.x, gid.y) {
+        return;
+    }
+    let v_c = values[pixel].w;
+    let agree = v_c == 0.0 || v_c == 1.0;
+    if !agree && paired_taps(gid.x, gid.y) == FULL_WINDOW {
         return;
     }
     let slot = atomicAdd(&list[0], 1u);

@@ -212,4 +212,16 @@ fn refinement_needs_the_filter_and_an_interleaved_tracer() {
         .render(ctx(), &gpu_scene, &view, &refined_settings(16, 16))
         .unwrap_err();
     assert!(err.to_string().contains("interleaved tracer"), "{err}");
+
+    // Nothing to refine (the camera sees only sky): no pixel refined, no error.
+    let mut sky = view;
+    sky.camera.target = sky.camera.eye + (sky.camera.eye - view.camera.target);
+    let frame = renderer
+        .render(ctx(), &gpu_scene, &sky, &refined_settings(16, 16))
+        .unwrap();
+    assert!(
+        frame.masks.iter().all(|&m| m & MASK_SKY != 0),
+        "the camera sees geometry"
+    );
+    assert!(frame.refined.iter().all(|&r| !r));
 }

@@ -1,5 +1,5 @@
-//! The refinement pass: after the filter, the pixels whose filter window is cut and whose
-//! visibility changes around them get all 256 light samples, and their filtered value
+//! The refinement pass: after the filter, the pixels where visibility changes around them
+//! and the filter's window is cut or their own rays agree get all 256 light samples, and their filtered value
 //! becomes the 256-ray one (see [`crate::reference::refine`], the CPU twin, for why and
 //! which pixels).
 //!
@@ -102,10 +102,13 @@ impl Refinement {
             .record(&mut encoder, "refine select", &bind, writes, groups);
         ctx.queue.submit([encoder.finish()]);
         let listed = read_buffer::<u32>(ctx, &list, 0..4)?[0];
+        if listed == 0 {
+            return Ok(Vec::new());
+        }
 
         // Chunks whose sample image (16 texels per listed pixel) fits one storage binding.
         let texel = size_of::<GBufferTexel>() as u64;
-        let tiles_x = SAMPLE_TILES_X.min(listed.max(1));
+        let tiles_x = SAMPLE_TILES_X.min(listed);
         let fit = ctx.info.max_storage_buffer_binding_size / (SETS as u64 * texel);
         // The resolve dispatch has one invocation per slot, 64 per workgroup, along x.
         let fit = fit.min(u64::from(ctx.info.max_compute_workgroups_per_dimension) * 64);

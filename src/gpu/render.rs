@@ -37,9 +37,10 @@ pub struct FrameSettings {
     /// Largest tile side (a multiple of 4) to render the image in, or `None` for the
     /// largest whose buffers fit the adapter's storage-buffer limit (tests force tiling).
     pub max_tile: Option<u32>,
-    /// After the filter, trace all 256 light samples for the pixels whose filter window is
-    /// cut while visibility changes around them ([`crate::reference::refine`]). Needs the
-    /// filter and an interleaved tracer (not [`Tracer::Reference`]).
+    /// After the filter, trace all 256 light samples for the pixels where visibility
+    /// changes around them and the filter's window is cut or their own rays agree
+    /// ([`crate::reference::refine`]). Needs the filter and an interleaved tracer (not
+    /// [`Tracer::Reference`]).
     pub refine: bool,
 }
 

@@ -6,11 +6,17 @@
 //! The filter turns 16 rays per pixel into ~256 only where its window is whole. Where a
 //! silhouette, a crease, a sharp shadow edge or the image border cuts it, the filter keeps
 //! a smaller, noisier or more biased average, and those pixels hold most of its error
-//! against exact visibility (`penumbra quality`, README "Quality"). A pixel is refined when
-//! its window is cut ([`paired_taps`] is not [`FULL_WINDOW`]) and its unfiltered
-//! visibility is not the same all around it (the centre is partly lit, or a neighbour with
-//! geometry has another visibility): a cut window in a uniformly lit or shadowed region
-//! needs no more rays. The refined value replaces the filtered one:
+//! against exact visibility (`penumbra quality`, README "Quality"). And where a pixel's 16
+//! rays agree (lit or in umbra) next to a neighbour whose rays do not, the window blurs
+//! the penumbra's edge into it. A pixel is refined when its unfiltered visibility is not
+//! the same all around it (the centre is partly lit, or a neighbour with geometry has
+//! another visibility) and either its window is cut ([`paired_taps`] is not
+//! [`FULL_WINDOW`]) or its own rays agree. Uniformly lit or shadowed regions need no more
+//! rays, and inside an open penumbra a whole window averages all 16 sets. Measured with
+//! `penumbra quality --size 512x512` on three views (RMSE against exact, rays per pixel):
+//! refining cut windows only gave playground 0.00299 (55.5 rays), Sponza atrium 0.0022
+//! (53.2), bunny 0.0030 (47.1); adding the pixels whose rays agree, 0.00259 (62.2),
+//! 0.00193 (58.0), 0.00270 (54.0). The refined value replaces the filtered one:
 //! `irradiance · (256 − blocked) / 256` over the whole interleaved pattern. (The GPU
 //! traces all 16 sets, its own again, as one 4×4 tile of a sample image; the twin takes
 //! the own set's rays from the frame's mask, which is the same.)
@@ -25,8 +31,8 @@ use crate::reference::shadow::{MASK_FULL, per_ray_mask};
 use crate::sampling::{SAMPLES, SETS, pixel_set};
 
 /// Whether pixel `(x, y)` is refined (the filter's inputs as for
-/// [`crate::filter::filter_pixel`]): it has geometry, the filter's window around it is
-/// cut, and its unfiltered visibility is not the same all around it.
+/// [`crate::filter::filter_pixel`]): it has geometry, its unfiltered visibility is not the
+/// same all around it, and the filter's window around it is cut or its own 16 rays agree.
 pub fn needs_refinement(
     params: &FilterParams,
     values: &[[f32; 4]],
@@ -37,9 +43,10 @@ pub fn needs_refinement(
 ) -> bool {
     let width = params.width as usize;
     let c = y as usize * width + x as usize;
+    let v_c = values[c][3];
     depth[c] > 0.0
-        && paired_taps(params, values, depth, normal, x, y) != FULL_WINDOW
         && visibility_varies(params, values, depth, x, y)
+        && (v_c == 0.0 || v_c == 1.0 || paired_taps(params, values, depth, normal, x, y) != FULL_WINDOW)
 }
 
 /// The centre is neither fully lit nor in umbra, or a neighbour of its window with
@@ -185,6 +192,16 @@ mod tests {
         let (p, values, depth, normal) = image(12, 12, |_, _| 0.5);
         assert!(!needs_refinement(&p, &values, &depth, &normal, 6, 6));
         assert!(needs_refinement(&p, &values, &depth, &normal, 0, 6));
+
+        // The fringe of a penumbra: a lit pixel beside one with a blocked ray is
+        // refined (whole window: 1/16 is within the visibility tolerance); the
+        // partly lit pixel, whose window is whole, is not.
+        let (p, values, depth, normal) =
+            image(12, 12, |x, y| if (x, y) == (6, 6) { 15.0 / 16.0 } else { 1.0 });
+        assert_eq!(paired_taps(&p, &values, &depth, &normal, 5, 6), FULL_WINDOW);
+        assert!(needs_refinement(&p, &values, &depth, &normal, 5, 6));
+        assert!(!needs_refinement(&p, &values, &depth, &normal, 6, 6));
+        assert!(!needs_refinement(&p, &values, &depth, &normal, 3, 6));
 
         // A pixel without geometry is never refined; a silhouette cuts the window.
         let (p, values, mut depth, normal) = image(12, 12, |x, _| if x < 6 { 0.25 } else { 0.5 });
