@@ -18,6 +18,7 @@ use penumbra::reference::refine::refine_image;
 use penumbra::reference::shade::shade_params;
 use penumbra::reference::shadow::{MASK_SKY, shadow_params};
 use penumbra::sampling;
+use penumbra::view::View;
 use support::gpu::{ctx, embedded};
 
 /// A frame with the refinement and the G-buffer.
@@ -29,10 +30,19 @@ fn refined_settings(w: u32, h: u32) -> FrameSettings {
     }
 }
 
+/// The same frame as [`refined_settings`] asks for, without the refinement.
+fn unrefined(renderer: &Renderer, scene: &GpuScene, view: &View, w: u32, h: u32) -> Frame {
+    let settings = FrameSettings {
+        refine: false,
+        ..refined_settings(w, h)
+    };
+    renderer.render(ctx(), scene, view, &settings).unwrap()
+}
+
 /// The CPU twin's filtered-and-refined image for a GPU frame, from the frame's own
 /// G-buffer, masks and unfiltered values (each checked against its twin by other tests),
 /// and which pixels it refined.
-fn cpu_refined(frame: &Frame, bvh: &Bvh, view: &penumbra::view::View) -> (Vec<[f32; 4]>, Vec<bool>) {
+fn cpu_refined(frame: &Frame, bvh: &Bvh, view: &View) -> (Vec<[f32; 4]>, Vec<bool>) {
     let (w, h) = (frame.width, frame.height);
     let gbuffer = frame.gbuffer.as_ref().expect("kept G-buffer");
     let params = FilterParams::new(w, h);
@@ -119,17 +129,7 @@ fn refinement_matches_cpu_twin() {
         assert_eq!(tiles.filtered, frame.filtered, "{}: tiled values", s.name);
 
         // Without refinement: the same filtered image except at the refined pixels.
-        let plain = renderer
-            .render(
-                ctx(),
-                &gpu_scene,
-                &view,
-                &FrameSettings {
-                    refine: false,
-                    ..refined_settings(w, h)
-                },
-            )
-            .unwrap();
+        let plain = unrefined(renderer, &gpu_scene, &view, w, h);
         assert!(plain.refined.iter().all(|&r| !r));
         for p in 0..plain.filtered.len() {
             if !frame.refined[p] {
@@ -159,17 +159,7 @@ fn refinement_brings_the_image_closer_to_exact() {
         let frame = renderer
             .render(ctx(), &gpu_scene, &view, &refined_settings(w, h))
             .unwrap();
-        let plain = renderer
-            .render(
-                ctx(),
-                &gpu_scene,
-                &view,
-                &FrameSettings {
-                    refine: false,
-                    ..refined_settings(w, h)
-                },
-            )
-            .unwrap();
+        let plain = unrefined(&renderer, &gpu_scene, &view, w, h);
         let exact = exact_visibility_image(&bvh, frame.gbuffer.as_ref().unwrap(), w, h, &view.light);
         let hit: Vec<usize> = (0..frame.masks.len())
             .filter(|&p| frame.masks[p] & MASK_SKY == 0)
