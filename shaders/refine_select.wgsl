@@ -1,7 +1,8 @@
 // Refinement, step 1 of 3: lists the pixels the discontinuity filter cannot serve: those whose
 // unfiltered visibility changes at or around them and whose window is cut (a silhouette, a
-// crease, a sharp shadow edge, the image border: the filter averages fewer than the 16 sample
-// sets there) or whose own 16 rays agree (the window would blur a penumbra's edge into them).
+// crease, the image border, a neighbour more than one ray apart: the filter averages fewer
+// than the 16 sample sets there, or over a real change) or whose own 16 rays agree (the
+// window would blur a penumbra's edge into them).
 // refine_gather, the shadow tracer and refine_resolve then give each of them all 256 samples.
 // Dispatched by the renderer after the filter, ceil(width/8) × ceil(height/8) workgroups.
 // CPU twin: penumbra::reference::refine::needs_refinement.
@@ -10,6 +11,8 @@
 
 const WG_SIZE: u32 = 8u;
 
+// The filter's parameters with the refinement's visibility tolerance (one ray: tighter than
+// the filter's), so a window is cut wherever a neighbour differs by more than one ray.
 @group(0) @binding(0) var<uniform> filter_params: FilterParams;
 // The filter's inputs: (irradiance rgb, unfiltered visibility), depth (0 = no hit), normal.
 @group(0) @binding(1) var<storage, read> values: array<vec4<f32>>;

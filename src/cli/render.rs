@@ -123,9 +123,9 @@ pub struct RenderArgs {
     #[arg(long)]
     no_filter: bool,
     /// After the filter, trace all 256 light samples at the pixels where visibility changes
-    /// around them and the filter's window is cut (silhouettes, creases, sharp shadow edges)
-    /// or their own 16 rays agree (the edge of a penumbra): closer to exact visibility, for
-    /// more rays (mft, packet and per-ray; needs the filter).
+    /// around them and the filter's window is cut (silhouettes, creases, neighbours more
+    /// than one ray apart) or their own 16 rays agree (the edge of a penumbra): closer to
+    /// exact visibility, for more rays (mft, packet and per-ray; needs the filter).
     #[arg(long, conflicts_with = "no_filter")]
     refine: bool,
     /// Filter: neighbours whose depth differs by more than this fraction of the pixel's are ignored.

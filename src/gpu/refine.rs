@@ -28,8 +28,9 @@ const SAMPLE_TILES_X: u32 = 256;
 pub struct RefineBuffers<'a> {
     /// Width and height of the frame in pixels.
     pub size: (u32, u32),
-    /// `FilterParams` uniform of the frame's filter (same tolerances: same window).
-    pub filter_params: &'a wgpu::Buffer,
+    /// `FilterParams` uniform for `refine_select`: the filter's, with the refinement's
+    /// visibility tolerance ([`crate::reference::refine::selection_params`]).
+    pub selection_params: &'a wgpu::Buffer,
     /// The frame's `ShadowParams` (light, `t_max`, budget); its size fields are replaced.
     pub shadow_params: &'a ShadowParams,
     /// `ShadeParams` uniform of the frame's shade pass.
@@ -95,7 +96,7 @@ impl Refinement {
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         let bind = self
             .select
-            .bind(ctx, &[b.filter_params, b.values, b.depth, b.normal, &list]);
+            .bind(ctx, &[b.selection_params, b.values, b.depth, b.normal, &list]);
         let writes = timer.pass_writes("refine");
         let groups = (width.div_ceil(8), height.div_ceil(8));
         self.select

@@ -14,6 +14,7 @@ use crate::filter::FilterParams;
 use crate::frame::{RAY_OFFSET_FRACTION, camera_params, tile_camera};
 use crate::layout::{CameraParams, GBufferTexel};
 use crate::reference::primary_mft::ITERATION_BUDGET;
+use crate::reference::refine::selection_params;
 use crate::reference::shade::shade_params;
 use crate::reference::shadow::shadow_params;
 use crate::sampling;
@@ -38,8 +39,8 @@ pub struct FrameSettings {
     /// largest whose buffers fit the adapter's storage-buffer limit (tests force tiling).
     pub max_tile: Option<u32>,
     /// After the filter, trace all 256 light samples for the pixels where visibility
-    /// changes around them and the filter's window is cut or their own rays agree
-    /// ([`crate::reference::refine`]). Needs the filter and an interleaved tracer (not
+    /// changes around them and their window is cut (at a one-ray visibility tolerance) or
+    /// their own rays agree ([`crate::reference::refine`]). Needs the filter and an interleaved tracer (not
     /// [`Tracer::Reference`]).
     pub refine: bool,
 }
@@ -471,7 +472,7 @@ impl Renderer {
         ctx.queue.submit([encoder.finish()]);
 
         let mut refined = vec![false; pixels as usize];
-        if let Some(filter_params) = filter_params.as_ref().filter(|_| settings.refine) {
+        if settings.refine {
             let refinement = match self.refinement.get() {
                 Some(r) => r,
                 None => {
@@ -480,9 +481,13 @@ impl Renderer {
                 }
             };
             let shadow = shadow_params(&view.light, w, h);
+            let (depth_tolerance, normal_tolerance) =
+                settings.filter.expect("checked: refine needs the filter");
+            let filter = FilterParams::with_tolerances(w, h, depth_tolerance, normal_tolerance);
+            let selection = uniform_buffer(ctx, "refine selection params", &selection_params(&filter));
             let buffers = RefineBuffers {
                 size: (w, h),
-                filter_params,
+                selection_params: &selection,
                 shadow_params: &shadow,
                 shade_params: &shade_buf,
                 values: &values,

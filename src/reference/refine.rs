@@ -11,12 +11,15 @@
 //! the penumbra's edge into it. A pixel is refined when its unfiltered visibility is not
 //! the same all around it (the centre is partly lit, or a neighbour with geometry has
 //! another visibility) and either its window is cut ([`paired_taps`] is not
-//! [`FULL_WINDOW`]) or its own rays agree. Uniformly lit or shadowed regions need no more
-//! rays, and inside an open penumbra a whole window averages all 16 sets. Measured with
-//! `penumbra quality --size 512x512` on three views (RMSE against exact, rays per pixel):
-//! refining cut windows only gave playground 0.00299 (55.5 rays), Sponza atrium 0.0022
-//! (53.2), bunny 0.0030 (47.1); adding the pixels whose rays agree, 0.00259 (62.2),
-//! 0.00193 (58.0), 0.00270 (54.0). The refined value replaces the filtered one:
+//! [`FULL_WINDOW`], with the visibility test at [`REFINE_VISIBILITY_TOLERANCE`], one ray,
+//! instead of the filter's two) or its own rays agree. Uniformly lit or shadowed regions
+//! need no more rays, and inside an open penumbra whose neighbours differ by at most one
+//! ray a whole window averages all 16 sets. Measured with `penumbra quality --size
+//! 512x512` (RMSE against exact, rays per pixel): refining cut windows only gave
+//! playground 0.00299 (55.5 rays), Sponza atrium 0.0022 (53.2), bunny 0.0030 (47.1);
+//! adding the pixels whose rays agree, 0.00259 (62.2), 0.00193 (58.0), 0.00270 (54.0);
+//! with the one-ray tolerance too, bunny 0.00197 (58.4) and duck 0.00217 (64.4, was
+//! 0.0030 with 54.2). The refined value replaces the filtered one:
 //! `irradiance · (256 − blocked) / 256` over the whole interleaved pattern. (The GPU
 //! traces all 16 sets, its own again, as one 4×4 tile of a sample image; the twin takes
 //! the own set's rays from the frame's mask, which is the same.)
@@ -30,9 +33,25 @@ use crate::reference::shade::unshadowed_irradiance;
 use crate::reference::shadow::{MASK_FULL, per_ray_mask};
 use crate::sampling::{SAMPLES, SETS, pixel_set};
 
+/// Visibility tolerance of the refinement's window test: one ray of 16. A neighbour on
+/// the same surface whose unfiltered visibility differs by more cuts the window, so the
+/// pixel is refined; the filter itself averages neighbours up to two rays apart
+/// ([`FilterParams::DEFAULT_VISIBILITY_TOLERANCE`]). See the module's figures.
+pub const REFINE_VISIBILITY_TOLERANCE: f32 = 1.0 / 16.0;
+
+/// The filter's parameters with the refinement's visibility tolerance: what
+/// `refine_select` gets as its `filter_params`.
+pub fn selection_params(filter: &FilterParams) -> FilterParams {
+    FilterParams {
+        visibility_tolerance: REFINE_VISIBILITY_TOLERANCE,
+        ..*filter
+    }
+}
+
 /// Whether pixel `(x, y)` is refined (the filter's inputs as for
 /// [`crate::filter::filter_pixel`]): it has geometry, its unfiltered visibility is not the
-/// same all around it, and the filter's window around it is cut or its own 16 rays agree.
+/// same all around it, and its window (with the filter's geometry tolerances from `params`
+/// and [`REFINE_VISIBILITY_TOLERANCE`]) is cut or its own 16 rays agree.
 pub fn needs_refinement(
     params: &FilterParams,
     values: &[[f32; 4]],
@@ -44,9 +63,10 @@ pub fn needs_refinement(
     let width = params.width as usize;
     let c = y as usize * width + x as usize;
     let v_c = values[c][3];
+    let selection = selection_params(params);
     depth[c] > 0.0
         && visibility_varies(params, values, depth, x, y)
-        && (v_c == 0.0 || v_c == 1.0 || paired_taps(params, values, depth, normal, x, y) != FULL_WINDOW)
+        && (v_c == 0.0 || v_c == 1.0 || paired_taps(&selection, values, depth, normal, x, y) != FULL_WINDOW)
 }
 
 /// The centre is neither fully lit nor in umbra, or a neighbour of its window with
@@ -202,6 +222,13 @@ mod tests {
         assert!(needs_refinement(&p, &values, &depth, &normal, 5, 6));
         assert!(!needs_refinement(&p, &values, &depth, &normal, 6, 6));
         assert!(!needs_refinement(&p, &values, &depth, &normal, 3, 6));
+
+        // Inside a penumbra, a neighbour two rays away: the filter averages it, the
+        // refinement's one-ray tolerance cuts the window there.
+        let (p, values, depth, normal) = image(12, 12, |x, _| if x < 6 { 0.5 } else { 0.625 });
+        assert_eq!(paired_taps(&p, &values, &depth, &normal, 5, 6), FULL_WINDOW);
+        assert!(needs_refinement(&p, &values, &depth, &normal, 5, 6));
+        assert!(!needs_refinement(&p, &values, &depth, &normal, 2, 6));
 
         // A pixel without geometry is never refined; a silhouette cuts the window.
         let (p, values, mut depth, normal) = image(12, 12, |x, _| if x < 6 { 0.25 } else { 0.5 });
