@@ -10,7 +10,7 @@ use super::primary_pass::{PrimaryPass, PrimaryStatus, PrimaryTracer};
 use super::refine::{RefineBuffers, Refinement};
 use super::shadow_tracer::{LeafMode, ShadowStats, ShadowTracer, Tracer, TracerOptions, VectorVariant};
 use super::{GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer, storage_buffer};
-use crate::filter::FilterParams;
+use crate::filter::{FILTER_KERNEL, FilterParams};
 use crate::frame::{RAY_OFFSET_FRACTION, camera_params, tile_camera};
 use crate::layout::{CameraParams, GBufferTexel};
 use crate::reference::primary_mft::ITERATION_BUDGET;
@@ -233,7 +233,7 @@ impl Renderer {
             )?,
             filter: Kernel::new(
                 ctx,
-                "filter",
+                FILTER_KERNEL,
                 &[],
                 &[Uniform, ReadOnly, ReadOnly, ReadOnly, ReadWrite],
                 &[],
@@ -438,13 +438,14 @@ impl Renderer {
         }
         let primary_counters = primary_status.check()?.unwrap_or_default();
 
+        let shadow = shadow_params(&view.light, w, h);
         let shadow_stats = self.shadow.run(
             ctx,
             scene,
             &gbuffer,
             &light_points,
             &masks,
-            &shadow_params(&view.light, w, h),
+            &shadow,
             Some(&mut timer),
             &mut |done, total| progress(Phase::Shadow, done, total),
         )?;
@@ -458,21 +459,22 @@ impl Renderer {
             let writes = timer.pass_writes("shade");
             self.shade.record(&mut encoder, "shade", &bind, writes, groups);
         }
-        let filter_params = settings.filter.map(|(depth_tolerance, normal_tolerance)| {
-            let params = FilterParams::with_tolerances(w, h, depth_tolerance, normal_tolerance);
-            uniform_buffer(ctx, "filter params", &params)
+        let filter = settings.filter.map(|(depth_tolerance, normal_tolerance)| {
+            FilterParams::with_tolerances(w, h, depth_tolerance, normal_tolerance)
         });
-        if let Some(params_buf) = &filter_params {
+        if let Some(params) = &filter {
+            let params_buf = uniform_buffer(ctx, "filter params", params);
             let bind = self
                 .filter
-                .bind(ctx, &[params_buf, &values, &depth, &normal, &filtered]);
+                .bind(ctx, &[&params_buf, &values, &depth, &normal, &filtered]);
             let writes = timer.pass_writes("filter");
             self.filter.record(&mut encoder, "filter", &bind, writes, groups);
         }
         ctx.queue.submit([encoder.finish()]);
 
         let mut refined = vec![false; pixels as usize];
-        if settings.refine {
+        // `render_with_phases` checked that a refined frame has the filter.
+        if let Some(filter) = filter.filter(|_| settings.refine) {
             let refinement = match self.refinement.get() {
                 Some(r) => r,
                 None => {
@@ -480,10 +482,6 @@ impl Renderer {
                     self.refinement.get_or_init(|| built)
                 }
             };
-            let shadow = shadow_params(&view.light, w, h);
-            let (depth_tolerance, normal_tolerance) =
-                settings.filter.expect("checked: refine needs the filter");
-            let filter = FilterParams::with_tolerances(w, h, depth_tolerance, normal_tolerance);
             let selection = uniform_buffer(ctx, "refine selection params", &selection_params(&filter));
             let buffers = RefineBuffers {
                 size: (w, h),

@@ -56,7 +56,7 @@ use glam::Vec3;
 
 use super::kernel::{Binding, Checks, Kernel, uniform_buffer_on};
 use super::{GpuContext, GpuScene, LeafMode, ShadowTracer, VectorVariant};
-use crate::filter::FilterParams;
+use crate::filter::{FILTER_KERNEL, FilterParams};
 use crate::frame::RAY_OFFSET_FRACTION;
 use crate::layout::{ImageSize, SurfaceParams};
 use crate::reference::shadow::{ITERATION_BUDGET, shadow_params};
@@ -209,7 +209,7 @@ impl ShadowPass {
             )?,
             filter: Kernel::new(
                 ctx,
-                "filter",
+                FILTER_KERNEL,
                 &[],
                 &[Uniform, ReadOnly, ReadOnly, ReadOnly, ReadWrite],
                 &[],
