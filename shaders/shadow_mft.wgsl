@@ -42,6 +42,10 @@ const TESTED: u32 = 0x20000u;
 override SHRINK: bool = false;
 const SHRINK_MARGIN: f32 = 0.0009765625;  // 1/1024 of a light edge
 const SHRINK_FLAG: u32 = 0x80000000u;
+// Widening of a frustum's bounding box, relative to its coordinates' size: far
+// above the rounding of a triangle stored as corner + edges, which may lie a
+// few ulps outside the box built from its corners.
+const BOUNDS_PAD: f32 = 1.0 / 262144.0;  // 2^-18
 
 @group(0) @binding(0) var<uniform> params: ShadowParams;
 // The BVH as 32-bit words (shared/bvh layouts), read through shared/bvh_vec16.
@@ -66,6 +70,9 @@ var<private> f_lo: vec2<f32>;
 var<private> f_hi: vec2<f32>;
 // SHRINK_FLAG | the mask the corners were shrunk for; 0: not shrunk.
 var<private> f_shrunk_for: u32;
+// The box around the origin and f_corner, widened by BOUNDS_PAD (relative).
+var<private> f_bmin: vec3<f32>;
+var<private> f_bmax: vec3<f32>;
 var<private> f_initial: u32;
 
 // The vector's traversal stack (the same in every lane).
@@ -143,7 +150,8 @@ fn setup_frustum(texel: GBufferTexel, sample_set: u32, inside: bool) {
     f_st[15] = sample_st(15u, lf);
 }
 
-// The side planes through the origin and the edges of f_corner (inward normals).
+// The side planes through the origin and the edges of f_corner (inward
+// normals), and the frustum's bounding box.
 fn set_sides() {
     let o = f_origin;
     let centre = (f_corner[0] + f_corner[2]) * 0.5;
@@ -151,6 +159,11 @@ fn set_sides() {
         let n = cross(f_corner[k] - o, f_corner[(k + 1u) % 4u] - o);
         f_side[k] = select(n, -n, dot(n, centre - o) < 0.0);
     }
+    let lo = min(min(o, min(f_corner[0], f_corner[1])), min(f_corner[2], f_corner[3]));
+    let hi = max(max(o, max(f_corner[0], f_corner[1])), max(f_corner[2], f_corner[3]));
+    let pad = max(abs(lo), abs(hi)) * BOUNDS_PAD;
+    f_bmin = lo - pad;
+    f_bmax = hi + pad;
 }
 
 // Light coordinates (s, t) of this lane's 16 samples: its rays go from the
@@ -228,7 +241,13 @@ fn box_outside(n: vec3<f32>, p0: vec3<f32>, node: BvhNode) -> bool {
     return dot(n, p - p0) < 0.0;
 }
 
+// Twin: reference::mft::frustum_may_hit_box.
 fn frustum_may_hit_box(node: BvhNode) -> bool {
+    // The boxes' axes first: this catches boxes beside a thin frustum's apex
+    // that straddle two of its planes (Sponza atrium 512²: 7 % fewer box tests).
+    if any(node.bmin > f_bmax) || any(node.bmax < f_bmin) {
+        return false;
+    }
     return !(box_outside(f_side[0], f_origin, node) || box_outside(f_side[1], f_origin, node)
         || box_outside(f_side[2], f_origin, node) || box_outside(f_side[3], f_origin, node)
         || box_outside(f_geo, f_origin, node) || box_outside(params.light_normal, corner(0u), node));
@@ -382,9 +401,21 @@ fn enter(m: u32, first: u32, count: u32) {
     }
 }
 
+// The traversal's order: the child whose centre is nearer the light's plane
+// first. Blockers found there stop rays early and shrink the frusta sooner;
+// against "the child more frusta want first", Sponza's atrium (512²) accessed
+// 45 % fewer triangles and tested 74 % fewer frustum-triangle pairs (the
+// packet kernel, which cannot shrink, gained nothing from it). Twin:
+// reference::mft::right_nearer_light.
+fn right_nearer_light(nl: BvhNode, nr: BvhNode) -> bool {
+    let kl = dot(params.light_normal, (nl.bmin + nl.bmax) * 0.5);
+    let kr = dot(params.light_normal, (nr.bmin + nr.bmax) * 0.5);
+    return kr < kl;
+}
+
 // One step of the traversal stage, unless a found leaf waits or it is done:
 // pop the stack if it must, then visit the inner node it is at (both child
-// boxes against every frustum that entered it), into the child more frusta want.
+// boxes against every frustum that entered it), into the child nearer the light.
 fn traversal_step() {
     if !t_done && p_end == 0u && t_popping {
         if t_depth == 0u {
@@ -409,8 +440,7 @@ fn traversal_step() {
         let mine = (t_mask & (1u << g_lane)) != 0u && !is_done();
         let ml = ballot16(mine && frustum_may_hit_box(nl));
         let mr = ballot16(mine && frustum_may_hit_box(nr));
-        // Into the child more frusta want first.
-        let d = descend(l, ml, mr, countOneBits(mr) > countOneBits(ml));
+        let d = descend(l, ml, mr, right_nearer_light(nl, nr));
         if d.later_mask != 0u {
             // The host checked that the BVH is shallower than the stack.
             stack_node[min(t_depth, STACK_SIZE - 1u)] = d.later;
