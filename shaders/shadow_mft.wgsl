@@ -402,13 +402,28 @@ fn enter(m: u32, first: u32, count: u32) {
     }
 }
 
-// The traversal's order: the child whose centre is nearer the light's plane
-// first. Blockers found there stop rays early and shrink the frusta sooner;
-// against "the child more frusta want first", Sponza's atrium (512²) accessed
-// 45 % fewer triangles and tested 74 % fewer frustum-triangle pairs (the
-// packet kernel, which cannot shrink, gained nothing from it). Twin:
-// reference::mft::right_nearer_light.
-fn right_nearer_light(nl: BvhNode, nr: BvhNode) -> bool {
+// The area of a box's shadow along the light's normal: the area it covers seen
+// from the light, which a shadow ray is the likelier to cross the larger it is.
+fn shadow_area(n: BvhNode) -> f32 {
+    let e = n.bmax - n.bmin;
+    let a = abs(params.light_normal);
+    return a.x * e.y * e.z + a.y * e.x * e.z + a.z * e.x * e.y;
+}
+
+// The traversal's order: the child with the larger shadow area first (on a
+// tie, the one whose centre is nearer the light's plane). Blockers found early
+// stop rays and shrink the frusta sooner. Steps of the CPU twin at 512², this
+// order against "the child more frusta want first": Sponza atrium 273K vs
+// 602K, columns 190K vs 362K, bunny 187K vs 218K, playground 86K vs 90K,
+// engine 73K vs 56K, Cornell box, duck and lattice within 3 %. The packet
+// kernel, which cannot shrink, keeps the latter. Twin:
+// reference::mft::right_first.
+fn right_first(nl: BvhNode, nr: BvhNode) -> bool {
+    let al = shadow_area(nl);
+    let ar = shadow_area(nr);
+    if ar != al {
+        return ar > al;
+    }
     let kl = dot(params.light_normal, (nl.bmin + nl.bmax) * 0.5);
     let kr = dot(params.light_normal, (nr.bmin + nr.bmax) * 0.5);
     return kr < kl;
@@ -416,7 +431,7 @@ fn right_nearer_light(nl: BvhNode, nr: BvhNode) -> bool {
 
 // One step of the traversal stage, unless a found leaf waits or it is done:
 // pop the stack if it must, then visit the inner node it is at (both child
-// boxes against every frustum that entered it), into the child nearer the light.
+// boxes against every frustum that entered it), into the child right_first picks.
 fn traversal_step() {
     if !t_done && p_end == 0u && t_popping {
         if t_depth == 0u {
@@ -441,7 +456,7 @@ fn traversal_step() {
         let mine = (t_mask & (1u << g_lane)) != 0u && !is_done();
         let ml = ballot16(mine && frustum_may_hit_box(nl));
         let mr = ballot16(mine && frustum_may_hit_box(nr));
-        let d = descend(l, ml, mr, right_nearer_light(nl, nr));
+        let d = descend(l, ml, mr, right_first(nl, nr));
         if d.later_mask != 0u {
             // The host checked that the BVH is shallower than the stack.
             stack_node[min(t_depth, STACK_SIZE - 1u)] = d.later;

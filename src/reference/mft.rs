@@ -442,8 +442,7 @@ fn leaf_triangle(
 
 /// One step of the traversal stage, unless a found leaf waits or it is done: pop
 /// the stack if it must, then visit the inner node it is at (both child boxes
-/// against every frustum that entered it), into the child nearer the light
-/// ([`right_nearer_light`]).
+/// against every frustum that entered it), into the child [`right_first`] picks.
 fn traversal_step(
     bvh: &Bvh,
     st: &mut VectorState,
@@ -472,7 +471,7 @@ fn traversal_step(
             })
         };
         let (ml, mr) = (wants(l), wants(l + 1));
-        let d = descend(l, ml, mr, right_nearer_light(bvh, l, params));
+        let d = descend(l, ml, mr, right_first(bvh, l, params));
         if let Some(later) = d.later {
             assert!(st.stack.len() < STACK_SIZE, "BVH deeper than the traversal stack");
             st.stack.push(later);
@@ -484,12 +483,26 @@ fn traversal_step(
     }
 }
 
-/// The traversal's order: whether child `l + 1`'s centre is nearer the
-/// light's plane than child `l`'s. Blockers found near the light stop rays
-/// early and shrink the frusta sooner (see `shaders/shadow_mft.wgsl`).
-fn right_nearer_light(bvh: &Bvh, l: u32, params: &ShadowParams) -> bool {
+/// The area of a box's shadow along the light's normal: the area it covers
+/// seen from the light, which a shadow ray is the likelier to cross the larger it is.
+fn shadow_area(n: &BvhNode, params: &ShadowParams) -> f32 {
+    let e = n.bmax - n.bmin;
+    let a = params.light_normal.abs();
+    a.x * e.y * e.z + a.y * e.x * e.z + a.z * e.x * e.y
+}
+
+/// The traversal's order: whether child `l + 1` comes first, the child with
+/// the larger [`shadow_area`] (on a tie, the one whose centre is nearer the
+/// light's plane). Blockers found early stop rays and shrink the frusta
+/// sooner (see `shaders/shadow_mft.wgsl`).
+fn right_first(bvh: &Bvh, l: u32, params: &ShadowParams) -> bool {
+    let (left, right) = (&bvh.nodes[l as usize], &bvh.nodes[l as usize + 1]);
+    let (al, ar) = (shadow_area(left, params), shadow_area(right, params));
+    if ar != al {
+        return ar > al;
+    }
     let key = |n: &BvhNode| params.light_normal.dot((n.bmin + n.bmax) * 0.5);
-    key(&bvh.nodes[l as usize + 1]) < key(&bvh.nodes[l as usize])
+    key(right) < key(left)
 }
 
 /// [`trace_tile`] under `options`.
