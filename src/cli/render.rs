@@ -153,8 +153,9 @@ pub struct RenderArgs {
     /// per 16-wide vector); the same G-buffer either way.
     #[arg(long, value_enum, default_value_t = PrimaryArg::PerRay)]
     primary: PrimaryArg,
-    /// MFT: do not shrink frusta to their still-active rays after a leaf that blocked
-    /// some (the paper's "CR" frustum shrinking, on by default; same image either way).
+    /// MFT: do not shrink frusta to their still-active rays (at the start and after a
+    /// leaf that blocked some: the paper's "CR" frustum shrinking, on by default; same
+    /// image either way).
     #[arg(long)]
     no_shrink: bool,
     /// GPU adapter: an index or part of its name (else PENUMBRA_ADAPTER, else automatic).

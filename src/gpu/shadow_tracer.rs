@@ -142,10 +142,11 @@ pub struct TracerOptions {
     /// Count work as Table 1 does (MFT and packet; see [`Counters`]). Off, the kernels
     /// are compiled without the counting code.
     pub counters: bool,
-    /// MFT: shrink frusta after leaves that blocked rays (the paper's "CR", §5.3;
-    /// see [`crate::reference::mft::Frustum::shrink_to`]). Same masks, fewer
-    /// triangle tests, a little more work per leaf. On by default: on Sponza at
-    /// 512×512 it halves the triangle tests and the shadow pass takes 0.5–0.75×
+    /// MFT: shrink frusta to their own samples at the start and after leaves that
+    /// blocked rays (the paper's "CR", §5.3; see
+    /// [`crate::reference::mft::Frustum::shrink_to`]). Same masks, fewer triangle
+    /// tests, a little more work per leaf. On by default: on Sponza's atrium at
+    /// 1024×1024 it cuts the triangle tests 11× and the shadow pass takes 0.3×
     /// the time (`penumbra bench --without-cr`).
     pub shrink: bool,
 }
