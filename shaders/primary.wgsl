@@ -52,7 +52,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         iterations += 1u;
         if iterations > ITERATION_BUDGET {
-            atomicAdd(&status[WORD_STATUS], 1u);
             break;
         }
         if cursor < end {
@@ -92,9 +91,17 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             depth += 1u;
         }
     }
+    // From the loop's own state (a flag set at the breaks a compiler could prove set):
+    // work left and budget left means the driver ended the loop (lavapipe's limit).
+    let overflow = iterations > ITERATION_BUDGET;
+    if overflow {
+        atomicAdd(&status[WORD_STATUS], 1u);
+    } else if cursor < end || depth != 0u {
+        atomicAdd(&status[WORD_LOOP_CUT], 1u);
+    }
     if COUNTERS {
         // No culling here: every triangle fetched is tested.
-        atomicAdd(&status[WORD_TRAVERSAL_STEPS], n_steps);
+        atomicAdd(&status[WORD_NODES_VISITED], n_steps);
         atomicAdd(&status[WORD_BOX_TESTS], n_box_tests);
         atomicAdd(&status[WORD_TRIANGLES_ACCESSED], n_triangles);
         atomicAdd(&status[WORD_TRIANGLES_AFTER_CULLING], n_triangles);

@@ -148,8 +148,8 @@ fn edge_culls(m: vec3<f32>, d: f32) -> bool {
 // rays) the whole frustum passes outside one of its edges.
 fn frustum_culls_triangle(tri: BvhTriangle) -> bool {
     let a0 = tri.v0 - camera.eye;
-    let a1 = (tri.v0 + tri.e1) - camera.eye;
-    let a2 = (tri.v0 + tri.e2) - camera.eye;
+    let a1 = tri.v1 - camera.eye;
+    let a2 = tri.v2 - camera.eye;
     let f = camera.forward;
     let near = min(min(dot(f, a0), dot(f, a1)), dot(f, a2));
     if near > f_t_max * DEPTH_SLACK {
@@ -335,8 +335,13 @@ fn main(ids: Vec16Ids) {
         // The host turns this into an error: the texels below are incomplete.
         atomicAdd(&status[WORD_STATUS], countOneBits(inside));
     }
+    if running && !overflow && g_lane == 0u {
+        // Left the loop neither way: the driver ended it (lavapipe's iteration limit);
+        // the host turns this into an error.
+        atomicAdd(&status[WORD_LOOP_CUT], 1u);
+    }
     if COUNTERS && g_lane == 0u {
-        atomicAdd(&status[WORD_TRAVERSAL_STEPS], n_steps);
+        atomicAdd(&status[WORD_NODES_VISITED], n_steps);
         atomicAdd(&status[WORD_BOX_TESTS], n_box_tests);
         atomicAdd(&status[WORD_TRIANGLES_ACCESSED], n_accessed);
         atomicAdd(&status[WORD_TRIANGLES_AFTER_CULLING], n_after_culling);

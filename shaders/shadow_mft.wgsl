@@ -2,6 +2,7 @@
 // Dispatched by the shadow pass (src/gpu/shadow_pass.rs); CPU twin: src/reference/mft.rs.
 
 #import shared/bvh
+#import shared/counters
 #import shared/descend
 #import shared/frame
 #import shared/vec16
@@ -32,8 +33,6 @@ const STATUS_SUSPENDED: u32 = 1u;
 // for each frustum f that is left, lane i tests ray i of f and a ballot gives
 // f's 16 bits. Both modes compute every bit with the same arithmetic.
 override LEAF_TRANSPOSED: bool = false;
-// Table 1 counters into status[1..6] (src/reference/counters.rs); off: no cost.
-override COUNTERS: bool = false;
 // Set in a per-lane test_triangle result when the frustum survived culling.
 const TESTED: u32 = 0x20000u;
 // Frustum shrinking, the paper's "CR": at the start, and after a leaf that
@@ -43,9 +42,9 @@ const TESTED: u32 = 0x20000u;
 override SHRINK: bool = false;
 const SHRINK_MARGIN: f32 = 0.0009765625;  // 1/1024 of a light edge
 const SHRINK_FLAG: u32 = 0x80000000u;
-// Widening of a frustum's bounding box, relative to its coordinates' size: far
-// above the rounding of a triangle stored as corner + edges, which may lie a
-// few ulps outside the box built from its corners.
+// Widening of a frustum's bounding box, relative to its coordinates' size: its
+// corners are rounded to f32, so the box of the rounded corners may miss a few
+// ulps of the exact pyramid; 2^-18 is far above that.
 const BOUNDS_PAD: f32 = 1.0 / 262144.0;  // 2^-18
 
 @group(0) @binding(0) var<uniform> params: ShadowParams;
@@ -56,7 +55,8 @@ const BOUNDS_PAD: f32 = 1.0 / 262144.0;  // 2^-18
 @group(0) @binding(4) var<storage, read> light_points: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> masks: array<u32>;
 @group(0) @binding(6) var<storage, read_write> state: array<u32>;
-// [0]: tiles suspended by this dispatch; [1..6]: counters.
+// [WORD_STATUS]: tiles suspended by this dispatch; [1..6]: the Table 1 counters
+// (shared/counters, when COUNTERS); [WORD_LOOP_CUT]: tiles whose loop the driver ended.
 @group(0) @binding(7) var<storage, read_write> status: array<atomic<u32>>;
 
 // This lane's frustum.
@@ -156,15 +156,24 @@ fn setup_frustum(texel: GBufferTexel, sample_set: u32, inside: bool) {
 fn set_sides() {
     let o = f_origin;
     let centre = (f_corner[0] + f_corner[2]) * 0.5;
-    for (var k = 0u; k < 4u; k++) {
-        let n = cross(f_corner[k] - o, f_corner[(k + 1u) % 4u] - o);
-        f_side[k] = select(n, -n, dot(n, centre - o) < 0.0);
-    }
+    // Unrolled on purpose: every loop iteration counts towards lavapipe's limit, and
+    // this runs at every shrink.
+    f_side[0] = side_plane(f_corner[0], f_corner[1], centre);
+    f_side[1] = side_plane(f_corner[1], f_corner[2], centre);
+    f_side[2] = side_plane(f_corner[2], f_corner[3], centre);
+    f_side[3] = side_plane(f_corner[3], f_corner[0], centre);
     let lo = min(min(o, min(f_corner[0], f_corner[1])), min(f_corner[2], f_corner[3]));
     let hi = max(max(o, max(f_corner[0], f_corner[1])), max(f_corner[2], f_corner[3]));
     let pad = max(abs(lo), abs(hi)) * BOUNDS_PAD;
     f_bmin = lo - pad;
     f_bmax = hi + pad;
+}
+
+// The inward normal of the plane through the origin, a and b (`centre` is inside).
+fn side_plane(a: vec3<f32>, b: vec3<f32>, centre: vec3<f32>) -> vec3<f32> {
+    let o = f_origin;
+    let n = cross(a - o, b - o);
+    return select(n, -n, dot(n, centre - o) < 0.0);
 }
 
 // Light coordinates (s, t) of this lane's 16 samples: its rays go from the
@@ -274,8 +283,8 @@ struct Wedge {
 
 fn triangle_wedge(tri: BvhTriangle, o: vec3<f32>) -> Wedge {
     let a0 = tri.v0 - o;
-    let a1 = (tri.v0 + tri.e1) - o;
-    let a2 = (tri.v0 + tri.e2) - o;
+    let a1 = tri.v1 - o;
+    let a2 = tri.v2 - o;
     let m0 = cross(a0, a1);
     return Wedge(m0, cross(a1, a2), cross(a2, a0), dot(m0, a2));
 }
@@ -323,8 +332,8 @@ fn ray_bit(j: u32, e: EdgeFunctions) -> u32 {
 fn planes_cull(tri: BvhTriangle) -> bool {
     let o = f_origin;
     let v0 = tri.v0;
-    let v1 = tri.v0 + tri.e1;
-    let v2 = tri.v0 + tri.e2;
+    let v1 = tri.v1;
+    let v2 = tri.v2;
     let a0 = v0 - o;
     let a1 = v1 - o;
     let a2 = v2 - o;
@@ -498,6 +507,7 @@ fn take_pending() {
         leaf_mask = p_mask;
         p_first = 0u;
         p_end = 0u;
+        p_mask = 0u;
     }
 }
 
@@ -523,6 +533,11 @@ fn main(ids: Vec16Ids) {
     if slot >= params.tiles_x * params.tiles_y {
         return;  // past the last tile of the dispatch (uniform: per vector)
     }
+    if params.resume == 0u && g_lane == 0u {
+        // A fresh start: whatever an earlier dispatch left in this slot (another
+        // chunk's tile, another frame's) must not be resumed.
+        state[base + ST_STATUS] = 0u;
+    }
     if params.resume != 0u && uniform16(state[base + ST_STATUS]) != STATUS_SUSPENDED {
         return;
     }
@@ -530,6 +545,7 @@ fn main(ids: Vec16Ids) {
 
     var cand_tri: BvhTriangle;  // transposed leaves: triangle cursor - 1, loaded once for all its candidates
     var running = true;
+    var cut = false;  // a loop of this invocation was ended by the driver
     if params.resume != 0u {
         t_children = uniform16(state[base + 1u]);
         t_mask = uniform16(state[base + 2u]);
@@ -553,10 +569,19 @@ fn main(ids: Vec16Ids) {
         if SHRINK && (shrunk_for & SHRINK_FLAG) != 0u {
             shrink_to(shrunk_for & MASK_FULL);
         }
-        for (var i = 0u; i < t_depth; i++) {
+        // At most STACK_SIZE passes, counted by lavapipe with the others (ITERATION_BUDGET).
+        var i = 0u;
+        loop {
+            if i >= t_depth {
+                break;
+            }
             stack_node[i] = uniform16(state[base + ST_STACK_NODE + i]);
             stack_mask[i] = uniform16(state[base + ST_STACK_MASK + i]);
+            i += 1u;
         }
+        // Ended by the driver before the stack was read: report it, trace nothing.
+        cut = i < t_depth;
+        running = !cut;
     } else {
         if SHRINK && !is_done() {
             // Start from the rectangle of the samples themselves (rays below
@@ -643,12 +668,22 @@ fn main(ids: Vec16Ids) {
             running = false;
         }
     }
+    // The loop stops only by finishing (running = false) or by suspending; left any
+    // other way, lavapipe ended it (its per-invocation iteration limit).
+    cut = cut || (running && !suspended);
     if COUNTERS && g_lane == 0u {
-        atomicAdd(&status[1], n_nodes);
-        atomicAdd(&status[2], n_boxes);
-        atomicAdd(&status[3], n_tris);
-        atomicAdd(&status[4], n_after_culling);
-        atomicAdd(&status[5], n_tests);
+        atomicAdd(&status[WORD_NODES_VISITED], n_nodes);
+        atomicAdd(&status[WORD_BOX_TESTS], n_boxes);
+        atomicAdd(&status[WORD_TRIANGLES_ACCESSED], n_tris);
+        atomicAdd(&status[WORD_TRIANGLES_AFTER_CULLING], n_after_culling);
+        atomicAdd(&status[WORD_TRIANGLE_TESTS], n_tests);
+    }
+    if cut {
+        // The masks of this tile are incomplete: write none, and let the host fail the pass.
+        if g_lane == 0u {
+            atomicAdd(&status[WORD_LOOP_CUT], 1u);
+        }
+        return;
     }
     if suspended {
         // Out of budget: save the state; the next dispatch resumes this tile.
@@ -668,11 +703,22 @@ fn main(ids: Vec16Ids) {
             state[base + ST_PENDING] = p_first;
             state[base + ST_PENDING + 1u] = p_end;
             state[base + ST_PENDING + 2u] = p_mask;
-            for (var i = 0u; i < t_depth; i++) {
+            var i = 0u;
+            loop {
+                if i >= t_depth {
+                    break;
+                }
                 state[base + ST_STACK_NODE + i] = stack_node[i];
                 state[base + ST_STACK_MASK + i] = stack_mask[i];
+                i += 1u;
             }
-            atomicAdd(&status[0], 1u);
+            if i < t_depth {
+                // Ended by the driver: the saved stack is incomplete.
+                state[base + ST_STATUS] = 0u;
+                atomicAdd(&status[WORD_LOOP_CUT], 1u);
+            } else {
+                atomicAdd(&status[WORD_STATUS], 1u);
+            }
         }
         return;
     }

@@ -2,6 +2,7 @@
 // Dispatched by the shadow tracer (src/gpu/shadow_tracer.rs, Tracer::Packet); CPU twin: src/reference/packet.rs.
 
 #import shared/bvh
+#import shared/counters
 #import shared/descend
 #import shared/frame
 #import shared/intersect
@@ -20,8 +21,6 @@ const ST_STACK_NODE: u32 = 24u;
 const ST_STACK_MASK: u32 = 88u;
 const STATUS_SUSPENDED: u32 = 1u;
 
-// Table 1 counters into status[1..6] (src/reference/counters.rs); off: no cost.
-override COUNTERS: bool = false;
 
 @group(0) @binding(0) var<uniform> params: ShadowParams;
 // The BVH as 32-bit words (shared/bvh layouts), read through shared/bvh_vec16.
@@ -31,7 +30,8 @@ override COUNTERS: bool = false;
 @group(0) @binding(4) var<storage, read> light_points: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> masks: array<u32>;
 @group(0) @binding(6) var<storage, read_write> state: array<u32>;
-// [0]: pixels suspended by this dispatch; [1..6]: counters.
+// [WORD_STATUS]: pixels suspended by this dispatch; [1..6]: the Table 1 counters
+// (shared/counters, when COUNTERS); [WORD_LOOP_CUT]: pixels whose loop the driver ended.
 @group(0) @binding(7) var<storage, read_write> status: array<atomic<u32>>;
 
 var<private> stack_node: array<u32, 64>;
@@ -48,6 +48,11 @@ fn main(ids: Vec16Ids) {
         return;  // uniform: per vector
     }
     let base = slot * STATE_WORDS;
+    if params.resume == 0u && g_lane == 0u {
+        // A fresh start: whatever an earlier dispatch left in this slot (another
+        // chunk's pixel, another frame's) must not be resumed.
+        state[base + ST_STATUS] = 0u;
+    }
     if params.resume != 0u && uniform16(state[base + ST_STATUS]) != STATUS_SUSPENDED {
         return;
     }
@@ -76,6 +81,7 @@ fn main(ids: Vec16Ids) {
     var depth = 0u;
     var popping = 0u;
     var running = true;
+    var cut = false;  // a loop of this invocation was ended by the driver
     var n_nodes = 0u;
     var n_boxes = 0u;
     var n_tris = 0u;
@@ -89,10 +95,19 @@ fn main(ids: Vec16Ids) {
         depth = uniform16(state[base + 6u]);
         popping = uniform16(state[base + 7u]);
         blocked = state[base + ST_LANES + g_lane] != 0u;
-        for (var i = 0u; i < depth; i++) {
+        // At most STACK_SIZE passes, counted by lavapipe with the others.
+        var i = 0u;
+        loop {
+            if i >= depth {
+                break;
+            }
             stack_node[i] = uniform16(state[base + ST_STACK_NODE + i]);
             stack_mask[i] = uniform16(state[base + ST_STACK_MASK + i]);
+            i += 1u;
         }
+        // Ended by the driver before the stack was read: report it, trace nothing.
+        cut = i < depth;
+        running = !cut;
     } else {
         alive = ballot16(!blocked);
         let root = load_node(0u);
@@ -179,13 +194,23 @@ fn main(ids: Vec16Ids) {
             }
         }
     }
+    // The loop stops only by finishing (running = false) or by suspending; left any
+    // other way, lavapipe ended it (its per-invocation iteration limit).
+    cut = cut || (running && !suspended);
     if COUNTERS && g_lane == 0u {
         // A packet test is one 16-wide test: no culling, every triangle accessed is tested.
-        atomicAdd(&status[1], n_nodes);
-        atomicAdd(&status[2], n_boxes);
-        atomicAdd(&status[3], n_tris);
-        atomicAdd(&status[4], n_tris);
-        atomicAdd(&status[5], n_tris);
+        atomicAdd(&status[WORD_NODES_VISITED], n_nodes);
+        atomicAdd(&status[WORD_BOX_TESTS], n_boxes);
+        atomicAdd(&status[WORD_TRIANGLES_ACCESSED], n_tris);
+        atomicAdd(&status[WORD_TRIANGLES_AFTER_CULLING], n_tris);
+        atomicAdd(&status[WORD_TRIANGLE_TESTS], n_tris);
+    }
+    if cut {
+        // This pixel's mask is incomplete: write none, and let the host fail the pass.
+        if g_lane == 0u {
+            atomicAdd(&status[WORD_LOOP_CUT], 1u);
+        }
+        return;
     }
     if suspended {
         state[base + ST_LANES + g_lane] = u32(blocked);
@@ -198,11 +223,22 @@ fn main(ids: Vec16Ids) {
             state[base + 5u] = alive;
             state[base + 6u] = depth;
             state[base + 7u] = popping;
-            for (var i = 0u; i < depth; i++) {
+            var i = 0u;
+            loop {
+                if i >= depth {
+                    break;
+                }
                 state[base + ST_STACK_NODE + i] = stack_node[i];
                 state[base + ST_STACK_MASK + i] = stack_mask[i];
+                i += 1u;
             }
-            atomicAdd(&status[0], 1u);
+            if i < depth {
+                // Ended by the driver: the saved stack is incomplete.
+                state[base + ST_STATUS] = 0u;
+                atomicAdd(&status[WORD_LOOP_CUT], 1u);
+            } else {
+                atomicAdd(&status[WORD_STATUS], 1u);
+            }
         }
         return;
     }

@@ -3,6 +3,7 @@
 // CPU twin: reference::shadow::per_ray_masks (16 rays) and reference::shadow::reference_counts.
 
 #import shared/bvh
+#import shared/counters
 #import shared/frame
 #import shared/intersect
 
@@ -24,12 +25,14 @@ override RAYS_PER_PIXEL: u32 = 16u;
 // Cleared by the host before the first dispatch; rays OR (or add) into their pixel's word.
 @group(0) @binding(5) var<storage, read_write> masks: array<atomic<u32>>;
 @group(0) @binding(6) var<storage, read_write> state: array<u32>;
-// [0]: rays that ran out of iterations (the host reports an error).
+// [WORD_STATUS]: rays that ran out of iterations, [WORD_LOOP_CUT]: rays whose loop the
+// driver ended (the host reports either as an error).
 @group(0) @binding(7) var<storage, read_write> status: array<atomic<u32>>;
 
 var<private> stack: array<u32, 64>;
 
-// Any hit along origin + t dir, 0 < t < t_max; -1 when the budget ran out.
+// Any hit along origin + t dir, 0 < t < t_max: 1 for a hit, 0 for none; -1 when the
+// budget ran out, -2 when the driver ended the loop (lavapipe's iteration limit).
 fn occluded(origin: vec3<f32>, dir: vec3<f32>) -> i32 {
     let inv_dir = safe_inverse(dir);
     var depth = 0u;
@@ -40,18 +43,21 @@ fn occluded(origin: vec3<f32>, dir: vec3<f32>) -> i32 {
     var cursor = 0u;
     var end = 0u;
     var iterations = 0u;
+    var result = 0;
     // One step per iteration (a node popped, or one leaf triangle): one loop for lavapipe.
     loop {
         if cursor == end && depth == 0u {
-            return 0;
+            break;
         }
         if iterations >= params.iteration_budget {
-            return -1;
+            result = -1;
+            break;
         }
         iterations += 1u;
         if cursor < end {
             if intersect_triangle(triangles[cursor], origin, dir, params.t_max).x > 0.0 {
-                return 1;
+                result = 1;
+                break;
             }
             cursor += 1u;
             continue;
@@ -75,7 +81,13 @@ fn occluded(origin: vec3<f32>, dir: vec3<f32>) -> i32 {
             depth += 1u;
         }
     }
-    return 0;  // not reached: the loop only returns
+    // Every break above sets `result` or leaves nothing to visit; anything else means the
+    // driver ended the loop. (The test reads the loop's own state, not a flag set at the
+    // breaks, which a compiler could prove always set.)
+    if result == 0 && (cursor != end || depth != 0u) {
+        return -2;
+    }
+    return result;
 }
 
 @compute @workgroup_size(WG_SIZE)
@@ -104,8 +116,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         || dot(texel.geo_normal, dir) <= 0.0;
     if !blocked {
         let hit = occluded(texel.origin, dir);
-        if hit < 0 {
-            atomicAdd(&status[0], 1u);
+        if hit == -1 {
+            atomicAdd(&status[WORD_STATUS], 1u);
+            return;
+        }
+        if hit == -2 {
+            atomicAdd(&status[WORD_LOOP_CUT], 1u);
             return;
         }
         blocked = hit == 1;

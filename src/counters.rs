@@ -20,6 +20,8 @@
 //! | 4 | [`triangles_after_culling`](Counters::triangles_after_culling) | of those, triangles at least one frustum did not cull | = word 3 (no culling) |
 //! | 5 | [`triangle_tests`](Counters::triangle_tests) | (triangle, frustum) pairs that survived culling: 16-ray tests | ray–triangle tests (= word 3) |
 //!
+//! Word 6 ([`WORD_LOOP_CUT`]) counts loops the driver ended early, whatever `COUNTERS`.
+//!
 //! Per-ray counts are scalar; comparing them with 16-wide ones (the paper's
 //! "16-wide AABB tests" for a packet-less tracer) divides them by 16, which is
 //! the reporting side's job. Words are `u32` and wrap past 2³²: at 1024×1024
@@ -39,6 +41,11 @@ pub const WORD_TRIANGLES_ACCESSED: usize = 3;
 pub const WORD_TRIANGLES_AFTER_CULLING: usize = 4;
 /// Status word of [`Counters::triangle_tests`].
 pub const WORD_TRIANGLE_TESTS: usize = 5;
+/// Status word: vectors (or rays) whose loop ended without finishing, suspending or
+/// running out of budget — the driver ended it (lavapipe after 65,535 iterations of all
+/// an invocation's loops), so their results are incomplete. The passes turn a non-zero
+/// count into an error ([`crate::Error::LoopCut`]).
+pub const WORD_LOOP_CUT: usize = 6;
 
 /// Work done by a tracer, summed over vectors (MFT: a 4×4 tile's 16 frusta;
 /// packet: one pixel's 16 rays).

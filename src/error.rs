@@ -99,6 +99,36 @@ pub enum Error {
         /// What is wrong, in words.
         message: String,
     },
+    /// A number passed in is outside what the call accepts: an image side of 0, a leaf
+    /// size, a ray count, an iteration budget.
+    #[error("{what} = {value}: {expected}")]
+    InvalidValue {
+        /// The setting or argument, e.g. `FrameSettings::width` or `--spp`.
+        what: String,
+        /// The value at fault, as given.
+        value: String,
+        /// What it must be, in words.
+        expected: String,
+    },
+    /// A kernel's loop ended before it finished, suspended or ran out of its budget: the
+    /// driver ended it (lavapipe ends an invocation's loops after 65,535 iterations), so
+    /// the pass's results are incomplete. Only an iteration budget above the driver's
+    /// limit lets this happen; the pass reports it instead of returning those results.
+    #[error(
+        "{pass}: the driver ended the loops of {count} {units} before they finished (lavapipe \
+         ends an invocation's loops after 65,535 iterations); the iteration budget {budget} is \
+         more than this driver runs — lower it"
+    )]
+    LoopCut {
+        /// The pass, e.g. `shadow pass (mft)`.
+        pass: String,
+        /// How many vectors, rays or pixels were cut short.
+        count: u64,
+        /// What `count` counts, e.g. `tiles`.
+        units: String,
+        /// The iteration budget the pass ran with.
+        budget: u32,
+    },
     /// An image needs a per-pixel GPU buffer larger than one storage-buffer
     /// binding of the adapter (checked before anything is allocated).
     #[error(
@@ -180,6 +210,19 @@ impl Error {
         Error::InvalidInput {
             what: what.into(),
             message: message.into(),
+        }
+    }
+
+    /// An [`Error::InvalidValue`]: `what` = `value` is not `expected`.
+    pub fn value(
+        what: impl Into<String>,
+        value: impl std::fmt::Display,
+        expected: impl Into<String>,
+    ) -> Self {
+        Error::InvalidValue {
+            what: what.into(),
+            value: value.to_string(),
+            expected: expected.into(),
         }
     }
 

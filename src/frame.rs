@@ -10,9 +10,34 @@ use crate::view::Camera;
 use crate::{Error, Result};
 
 /// Shadow-ray origins leave the surface by this fraction of the scene's
-/// diagonal: large enough to clear f32 rounding of the hit point, small
-/// enough not to open gaps at contacts (10⁻⁴ of 10 m is 1 mm).
+/// diagonal: near the origin large enough to clear f32 rounding of the hit
+/// point, small enough not to open gaps at contacts (10⁻⁴ of 10 m is 1 mm);
+/// far from the origin [`ORIGIN_OFFSET_ULPS`] takes over ([`shadow_ray_origin`]).
 pub const RAY_OFFSET_FRACTION: f32 = 1e-4;
+
+/// Shadow-ray origins leave the surface by at least this many steps of f32 (ulps) at
+/// the hit point's largest coordinate ([`shadow_ray_origin`]). A hit point far from
+/// the origin is off its triangle's plane by the rounding of `eye + t·dir` (up to a
+/// step per coordinate, √3 steps in distance) and the origin adds half a step per
+/// coordinate (√3/2): at most ~2.6 steps, so 4 clear it. Measured
+/// (`examples/far_from_origin.rs`, playground at 1e6): 2 steps still let a few rays
+/// start behind their surface, 4 and 8 none; every step more loses contact shadows
+/// within that distance. Near the origin the fixed offset is far larger (within 32 m
+/// of it 4 ulps are at most 1.5e-5 m; Sponza's offset is 3.5e-3 m).
+pub const ORIGIN_OFFSET_ULPS: f32 = 4.0;
+
+/// The shadow-ray origin of surface point `point` with unit `normal` (on the side the
+/// rays leave to): the point moved along the normal by `ray_offset` or by
+/// [`ORIGIN_OFFSET_ULPS`] steps of f32 at its largest coordinate, whichever is larger.
+/// A fixed offset alone fails far from the origin (a scene at 1e5 m has f32 steps of
+/// 7.8 mm): rays would start inside their own surface. The kernels compute the same
+/// expression (`shadow_ray_origin` in `shaders/shared/frame.wgsl`).
+pub fn shadow_ray_origin(point: Vec3, normal: Vec3, ray_offset: f32) -> Vec3 {
+    let m = point.abs().max_element();
+    // The spacing of f32 values at m: 2^(m's exponent) · 2⁻²³.
+    let ulp = f32::from_bits(m.to_bits() & 0x7f80_0000) * (1.0 / 8_388_608.0);
+    point + normal * ray_offset.max(ORIGIN_OFFSET_ULPS * ulp)
+}
 
 /// The camera for a `width`×`height` image (square pixels).
 ///
@@ -207,6 +232,37 @@ fn srgb_to_linear(c: u8) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn shadow_ray_origins_clear_the_f32_steps_of_far_points() {
+        let n = Vec3::Y;
+        // Near the origin the scene's offset rules.
+        assert_eq!(
+            shadow_ray_origin(Vec3::new(3.0, 1.0, -2.0), n, 1e-3),
+            Vec3::new(3.0, 1.001, -2.0)
+        );
+        // At 1e5 f32 steps are 2^16 · 2^-23 = 1/128: ORIGIN_OFFSET_ULPS of them, not the 1e-3 offset.
+        let far = Vec3::new(1e5, 0.5, 1e5);
+        let o = shadow_ray_origin(far, n, 1e-3);
+        assert_eq!(o.y, 0.5 + ORIGIN_OFFSET_ULPS / 128.0);
+        assert_eq!((o.x, o.z), (far.x, far.z));
+        // Zero point: no NaN, the fixed offset.
+        assert_eq!(shadow_ray_origin(Vec3::ZERO, n, 1e-3), Vec3::new(0.0, 1e-3, 0.0));
+    }
+
+    #[test]
+    fn the_kernels_offset_origins_by_the_same_number_of_ulps() {
+        let module = crate::shaders::validate(&crate::shaders::assemble("shade", &[]).unwrap()).unwrap();
+        let value = module
+            .constants
+            .iter()
+            .find(|(_, c)| c.name.as_deref() == Some("ORIGIN_OFFSET_ULPS"))
+            .map(|(_, c)| module.global_expressions[c.init].clone());
+        assert!(
+            matches!(value, Some(naga::Expression::Literal(naga::Literal::F32(v))) if v == ORIGIN_OFFSET_ULPS),
+            "shared/frame.wgsl ORIGIN_OFFSET_ULPS is {value:?}, frame::ORIGIN_OFFSET_ULPS is {ORIGIN_OFFSET_ULPS}"
+        );
+    }
 
     #[test]
     fn albedo_is_factor_times_nearest_texel_with_wrapping() {

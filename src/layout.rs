@@ -25,8 +25,11 @@ pub struct BvhNode {
     pub count: u32,
 }
 
-/// One triangle in the form the intersection test reads, 48 bytes
-/// (WGSL `BvhTriangle`): corner `v0` and edges `e1 = v1 - v0`, `e2 = v2 - v0`.
+/// One triangle, 48 bytes (WGSL `BvhTriangle`): its three corners as the scene gives
+/// them. Storing corners (not a corner and two edges, whose sum rounds) keeps the copies
+/// of a vertex that several triangles share bit-identical, so the multi-frusta edge
+/// functions of a shared edge are exactly negated and no ray slips between the two
+/// triangles (`tests/shadow_cpu.rs`, `tests/gpu_tracers.rs`: the closed room).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct BvhTriangle {
@@ -34,12 +37,12 @@ pub struct BvhTriangle {
     pub v0: Vec3,
     /// Index of this triangle in [`crate::scene::Scene::triangles`] (bytes 12..16).
     pub scene_index: u32,
-    /// Corner 1 − corner 0 (bytes 16..28).
-    pub e1: Vec3,
+    /// Corner 1 (bytes 16..28).
+    pub v1: Vec3,
     /// Unused (bytes 28..32).
     pub pad1: u32,
-    /// Corner 2 − corner 0 (bytes 32..44).
-    pub e2: Vec3,
+    /// Corner 2 (bytes 32..44).
+    pub v2: Vec3,
     /// Unused (bytes 44..48).
     pub pad2: u32,
 }
@@ -406,9 +409,9 @@ mod tests {
             fields!(BvhTriangle {
                 v0,
                 scene_index,
-                e1,
+                v1,
                 pad1,
-                e2,
+                v2,
                 pad2
             }),
         );

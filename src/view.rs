@@ -109,6 +109,18 @@ impl QuadLight {
 }
 
 impl View {
+    /// The same camera and light moved by `offset` (see [`crate::scene::Scene::translate`]).
+    pub fn translated(&self, offset: Vec3) -> View {
+        View {
+            camera: self.camera.translated(offset),
+            light: QuadLight {
+                corner: self.light.corner + offset,
+                ..self.light
+            },
+            ground_y: self.ground_y.map(|y| y + offset.y),
+        }
+    }
+
     /// A view for a scene that comes without one: the scene's own camera if
     /// it has one, else a camera looking at the bounds' centre from above one
     /// corner; and a square light a tenth of the diagonal wide, a quarter of
@@ -177,6 +189,15 @@ impl View {
 }
 
 impl Camera {
+    /// The same camera moved by `offset`.
+    pub fn translated(&self, offset: Vec3) -> Camera {
+        Camera {
+            eye: self.eye + offset,
+            target: self.target + offset,
+            ..*self
+        }
+    }
+
     /// Checks that the camera gives a view: finite fields and a [`Camera::basis`].
     pub fn validate(&self) -> Result<(), String> {
         check_finite(&[

@@ -108,8 +108,8 @@ fn camera_inside(eye: Vec3, bvh: &Bvh) -> bool {
         let dir = Vec3::from(d);
         closest_hit(bvh, eye, dir, f32::INFINITY).is_some_and(|hit| {
             let t = &bvh.triangles[hit.triangle as usize];
-            // Counter-clockwise corners face e1 × e2; a back face has it along the ray.
-            t.e1.cross(t.e2).dot(dir) > 0.0
+            // Counter-clockwise corners face (v1 − v0) × (v2 − v0); a back face has it along the ray.
+            (t.v1 - t.v0).cross(t.v2 - t.v0).dot(dir) > 0.0
         })
     })
 }

@@ -81,7 +81,10 @@ fn empty_input_and_bad_leaf_size_are_errors() {
         },
     )
     .unwrap_err();
-    assert!(e.to_string().contains("leaf size"), "{e}");
+    assert!(
+        matches!(e, penumbra::Error::InvalidValue { .. }) && e.to_string().contains("max_leaf_size = 0"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -75,10 +75,23 @@ fn embedded_frame(
     (w, h): (u32, u32),
     positions: bool,
 ) -> Embedded {
+    let targets = ShadowTargets::new(ctx(), w, h).unwrap();
+    embedded_frame_into(pass, scene, gpu_scene, view, &targets, positions)
+}
+
+/// [`embedded_frame`] into targets the caller keeps (and may have used for other frames).
+fn embedded_frame_into(
+    pass: &ShadowPass,
+    scene: &Scene,
+    gpu_scene: &GpuScene,
+    view: &View,
+    targets: &ShadowTargets,
+    positions: bool,
+) -> Embedded {
     let ctx = ctx();
+    let (w, h) = (targets.width(), targets.height());
     let rasterizer = Rasterizer::new(&ctx.device, scene);
     let host = HostGBuffer::new(&ctx.device, w, h);
-    let targets = ShadowTargets::new(ctx, w, h).unwrap();
     let (view_matrix, projection) = camera_matrices(&view.camera, scene.bounds().diagonal(), w, h);
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
     rasterizer.record(
@@ -107,7 +120,7 @@ fn embedded_frame(
         geometric_normal: Some(&host.face_normal),
         light: &view.light,
     };
-    pass.record(&mut encoder, gpu_scene, &inputs, &targets).unwrap();
+    pass.record(&mut encoder, gpu_scene, &inputs, targets).unwrap();
     ctx.queue.submit([encoder.finish()]);
     let pixels = u64::from(w * h);
     Embedded {
@@ -448,5 +461,59 @@ fn unfinished_tiles_are_reported_and_resume_rounds_finish_them() {
     assert_eq!(
         resumed.masks, full.masks,
         "resumed tiles give the uninterrupted masks"
+    );
+}
+
+/// A frame that leaves tiles unfinished leaves their suspended state in the targets'
+/// scratch buffers. The next frame recorded into the same targets must start every tile
+/// afresh: with resume rounds of its own, it must not resume the old frame's tiles (which
+/// would overwrite its finished masks with the old light's partial ones).
+#[test]
+fn a_frame_after_an_unfinished_one_starts_every_tile_afresh() {
+    let (scene, view) = embedded("lattice");
+    let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
+    let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
+    let (w, h) = (46, 38);
+    let targets = ShadowTargets::new(ctx(), w, h).unwrap();
+    let unfinishing = ShadowPass::new(
+        ctx(),
+        ShadowSettings {
+            iteration_budget: 100,
+            resume_rounds: 0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let first = embedded_frame_into(&unfinishing, &scene, &gpu_scene, &view, &targets, true);
+    assert!(
+        first.unfinished > 0,
+        "a budget of 100 steps leaves tiles unfinished"
+    );
+    // The next frame's light is elsewhere: a tile resumed from the first frame's state
+    // would carry that frame's blocked rays into this one.
+    let mut moved = view;
+    moved.light.corner += view.light.edge_u * 1.5;
+    let second = embedded_frame_into(
+        &ShadowPass::new(ctx(), ShadowSettings::default()).unwrap(),
+        &scene,
+        &gpu_scene,
+        &moved,
+        &targets,
+        true,
+    );
+    eprintln!(
+        "first frame: {} tiles unfinished; second frame: {} unfinished",
+        first.unfinished, second.unfinished
+    );
+    assert_eq!(second.unfinished, 0);
+    assert_masks_match_oracle(
+        "the frame after an unfinished one",
+        &scene,
+        &bvh,
+        &moved,
+        &second.gbuffer,
+        &second.masks,
+        w,
+        h,
     );
 }

@@ -14,7 +14,7 @@ use glam::{Vec2, Vec3};
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::filter::{FilterParams, discontinuity_filter};
 use penumbra::frame::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
-use penumbra::gpu::{Frame, FrameSettings, GpuScene, LeafMode, Renderer, RendererOptions};
+use penumbra::gpu::{Frame, FrameSettings, GpuScene, LeafMode, Renderer, RendererOptions, Tracer};
 use penumbra::layout::{GBufferTexel, ShadowParams};
 use penumbra::reference::mft::{Counters, Frustum, TileOptions, mft_masks_with, trace_tile_with};
 use penumbra::reference::primary::primary_gbuffer;
@@ -22,8 +22,8 @@ use penumbra::reference::shadow::{ITERATION_BUDGET, MASK_FULL, MASK_SKY, per_ray
 use penumbra::scene::Scene;
 use penumbra::view::{Camera, QuadLight, View};
 use penumbra::{assets, sampling};
-use support::gpu::{ctx, embedded, variants};
-use support::{Rng, compare_masks, scene_from_triangles};
+use support::gpu::{assert_same_rays, ctx, embedded, variants};
+use support::{Rng, compare_masks, edge_tolerance, own_triangle, scaled_and_moved, scene_from_triangles};
 
 /// lavapipe (Mesa 22.3) ends every loop of an invocation after this many
 /// iterations, counted across all its loops. Measured here: a loop nested in
@@ -284,6 +284,7 @@ fn filter_matches_cpu_twin() {
         let (plain, _) = render(&renderer, &gpu_scene, &view, &off);
         assert_eq!(plain.filtered, plain.unfiltered, "{}: filter off", s.name);
         assert_eq!(plain.unfiltered, frame.unfiltered, "{}: shading differs", s.name);
+        // One pipeline on the same input: the same bits on any adapter.
         assert_eq!(plain.masks, frame.masks, "{}: masks differ", s.name);
         assert_eq!(plain.pass_ms("filter"), 0.0, "{}: no filter pass ran", s.name);
     }
@@ -410,7 +411,16 @@ fn lit_and_umbra_are_exact() {
         assert!(penumbra_px > 0 && penumbra_vis.0 < penumbra_vis.1);
         match &first {
             None => first = Some(frame.masks.clone()),
-            Some(m) => assert_eq!(m, &frame.masks, "variants differ"),
+            Some(m) => assert_same_rays(
+                "subgroup vs workgroup",
+                m,
+                &frame.masks,
+                &scene,
+                &bvh,
+                &view,
+                gbuffer,
+                w,
+            ),
         }
     }
     eprintln!("lit_and_umbra_are_exact: {:.1} s", start.elapsed().as_secs_f64());
@@ -461,7 +471,6 @@ fn loop_limit_tile_still_matches_oracle() {
         settings.keep_gbuffer = true;
         let params = shadow_params(&view.light, w, h);
         let points = sampling::light_points(&view.light);
-        let diag = scene.bounds().diagonal();
         let corners: Vec<_> = scene.triangles.iter().map(|t| t.positions).collect();
 
         // The CPU side, on the CPU twin's G-buffer (the GPU's is checked against it below).
@@ -489,8 +498,18 @@ fn loop_limit_tile_still_matches_oracle() {
         let oracle = per_ray_masks(&bvh, &gbuffer, &points, &params);
         let occluded: u32 = oracle.iter().map(|m| (m & MASK_FULL).count_ones()).sum();
         let rays = gbuffer.len() * 16;
-        let (twin_differing, _, _) =
-            compare_masks(&oracle, &twin, &gbuffer, w, &points, &params, &corners, 0.0);
+        let twin_differing = compare_masks(
+            &oracle,
+            &twin,
+            &gbuffer,
+            w,
+            &points,
+            &params,
+            &corners,
+            &own_triangle(&bvh),
+            0.0,
+        )
+        .differing;
         eprintln!(
             "{leaf_mode}: {} triangles, BVH of {} nodes (depth {}); kernel steps per tile {steps:?} \
              (lavapipe limit {LAVAPIPE_LOOP_LIMIT}, budget {ITERATION_BUDGET}) predict {predicted} \
@@ -529,7 +548,7 @@ fn loop_limit_tile_still_matches_oracle() {
             );
             // The oracle on the GPU's own G-buffer, as in tests/gpu_render.rs.
             let oracle = per_ray_masks(&bvh, gpu_gbuffer, &points, &params);
-            let (differing, total, unexplained) = compare_masks(
+            let c = compare_masks(
                 &oracle,
                 &frame.masks,
                 gpu_gbuffer,
@@ -537,8 +556,11 @@ fn loop_limit_tile_still_matches_oracle() {
                 &points,
                 &params,
                 &corners,
-                1e-4 * diag,
+                &own_triangle(&bvh),
+                edge_tolerance(&scene),
             );
+            eprintln!("{variant} {leaf_mode}: against the per-ray oracle: {c}");
+            let (differing, total, unexplained) = (c.differing, c.total, c.unexplained);
             let twin_bits: u32 = twin
                 .iter()
                 .zip(&frame.masks)
@@ -695,7 +717,7 @@ fn cli_free_sizes() {
                 .count();
             let params = shadow_params(&view.light, w, h);
             let oracle = per_ray_masks(&bvh, gbuffer, &points, &params);
-            let (differing, total, unexplained) = compare_masks(
+            let c = compare_masks(
                 &oracle,
                 &frame.masks,
                 gbuffer,
@@ -703,8 +725,11 @@ fn cli_free_sizes() {
                 &points,
                 &params,
                 &corners,
-                1e-4 * scene.bounds().diagonal(),
+                &own_triangle(&bvh),
+                edge_tolerance(&scene),
             );
+            eprintln!("{variant} {w}x{h}: against the per-ray oracle: {c}");
+            let (differing, total, unexplained) = (c.differing, c.total, c.unexplained);
             let (filter_err, _) = max_channel_error(
                 &frame.filtered,
                 &cpu_filter(&frame, gbuffer, &FilterParams::new(w, h)),
@@ -731,6 +756,10 @@ fn cli_free_sizes() {
             .render(ctx(), &gpu_scene, &view, &FrameSettings::new(w, h))
             .expect_err("an empty image must be refused");
         eprintln!("{w}x{h}: {err}");
+        assert!(
+            !matches!(err, penumbra::Error::Gpu(_)) && err.to_string().contains(&format!("{w}x{h}")),
+            "a bad size is an input error naming it, not a GPU failure: {err:?}"
+        );
     }
     // A forced tile too large for one storage buffer: refused before anything is
     // allocated, naming the limit and the largest image that fits. (Unforced, the
@@ -791,6 +820,138 @@ fn shade_matches_cpu_twin() {
             radiance.iter().any(|r| r[0] > 0.0),
             "{}: the image is not black",
             s.name
+        );
+    }
+}
+
+/// Unfiltered visibility of `scene` seen through `view` with `tracer`, 256×256.
+fn visibility_image(scene: &Scene, view: &View, tracer: Tracer) -> Vec<f32> {
+    let bvh = Bvh::build(scene, &BvhSettings::default()).unwrap();
+    let gpu_scene = GpuScene::new(ctx(), scene, &bvh).unwrap();
+    let options = RendererOptions {
+        tracer,
+        ..RendererOptions::default()
+    };
+    let mut settings = FrameSettings::new(256, 256);
+    settings.filter = None;
+    let frame = Renderer::new(ctx(), options)
+        .unwrap()
+        .render(ctx(), &gpu_scene, view, &settings)
+        .unwrap();
+    frame
+        .masks
+        .iter()
+        .map(|&m| penumbra::reference::shadow::visibility(m))
+        .collect()
+}
+
+/// Pixels of `a` and `b` whose visibility differs by more than 1/16, and pixels lit in
+/// `a` (all 16 rays) that are more than half dark in `b`.
+fn differences(a: &[f32], b: &[f32]) -> (usize, usize) {
+    let off = a
+        .iter()
+        .zip(b)
+        .filter(|(x, y)| (*x - *y).abs() > 1.0 / 16.0)
+        .count();
+    let darkened = a.iter().zip(b).filter(|(x, y)| **x == 1.0 && **y < 0.5).count();
+    (off, darkened)
+}
+
+/// Far from the origin the renderer traces a scene as well as f32 stores it there: the
+/// playground made ten times larger (120 m) and moved by 1e5 and 1e6 along x and z (its
+/// view alike) renders, for every tracer, like the same stored (rounded) geometry moved
+/// back to the origin: at most 0.1 % of the pixels lit there are more than half dark out
+/// there. A fixed ray offset (10⁻⁴ of the diagonal, 17 mm) is below a few f32 steps at
+/// 1e6 (6.25 cm each), so rays started inside their own surface and 0.7 % of the pixels
+/// darkened; origins now clear the surface by 4 f32 steps of the point
+/// (frame::shadow_ray_origin), above the rounding of a hit point (at most ~2.6 steps).
+#[test]
+fn far_scenes_trace_as_their_stored_geometry_does_at_the_origin() {
+    let (base_scene, base_view) = embedded("playground");
+    let mut failures = Vec::new();
+    for tracer in [Tracer::Mft, Tracer::Packet, Tracer::PerRay] {
+        for offset in [1e5f32, 1e6] {
+            let t = Vec3::new(offset, 0.0, offset);
+            let (far_scene, far_view) = scaled_and_moved(&base_scene, &base_view, 10.0, t);
+            let mut stored = far_scene.clone();
+            stored.translate(-t);
+            let at_origin = visibility_image(&stored, &far_view.translated(-t), tracer);
+            let far = visibility_image(&far_scene, &far_view, tracer);
+            let (off, darkened) = differences(&at_origin, &far);
+            eprintln!(
+                "{tracer} at {offset:e}: {off} of {} pixels differ by more than 1/16, {darkened} lit pixels darkened",
+                far.len()
+            );
+            if darkened * 1000 > far.len() {
+                failures.push(format!("{tracer} at {offset:e}: {darkened} lit pixels darkened"));
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "self-shadowing far from the origin: {failures:?}"
+    );
+}
+
+/// What the CLI does with far scenes ([`Scene::recentre`] before the BVH is built) keeps
+/// their shadows as at the origin: the playground made 30 times larger (360 m, so that
+/// f32 stores it at 1e6 to 1/10,000 of its size) and moved by 1e5 and 1e6, re-centred,
+/// renders for every tracer a visibility where at most 0.1 % of the pixels differ by more
+/// than 1/16 from the scene built at the origin.
+#[test]
+fn re_centred_far_scenes_keep_their_shadows() {
+    let (base_scene, base_view) = embedded("playground");
+    let mut failures = Vec::new();
+    for tracer in [Tracer::Mft, Tracer::Packet, Tracer::PerRay] {
+        let (scene, view) = scaled_and_moved(&base_scene, &base_view, 30.0, Vec3::ZERO);
+        let near = visibility_image(&scene, &view, tracer);
+        for offset in [1e5f32, 1e6] {
+            let (mut far_scene, far_view) =
+                scaled_and_moved(&base_scene, &base_view, 30.0, Vec3::new(offset, 0.0, offset));
+            let shift = far_scene.recentre();
+            assert_ne!(shift, Vec3::ZERO, "a scene at {offset:e} is re-centred");
+            let far = visibility_image(&far_scene, &far_view.translated(-shift), tracer);
+            let (off, _) = differences(&near, &far);
+            eprintln!(
+                "{tracer} at {offset:e}, re-centred: {off} of {} pixels differ by more than 1/16",
+                far.len()
+            );
+            if off * 1000 > far.len() {
+                failures.push(format!("{tracer} at {offset:e}: {off} pixels off"));
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "shadows change far from the origin: {failures:?}"
+    );
+    // A scene near the origin is left as it is, bit for bit.
+    let mut near = base_scene.clone();
+    assert_eq!(near.recentre(), Vec3::ZERO);
+    assert_eq!(near.triangles, base_scene.triangles);
+}
+
+/// `Renderer::render` checks the view itself, as the CLI does: a degenerate camera or
+/// light is an error naming the field, not an image of NaN rays.
+#[test]
+fn render_refuses_a_degenerate_view() {
+    let (scene, view) = embedded("playground");
+    let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
+    let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
+    let renderer = Renderer::new(ctx(), None).unwrap();
+    let settings = FrameSettings::new(8, 8);
+    let mut same_point = view;
+    same_point.camera.target = same_point.camera.eye;
+    let mut flat_light = view;
+    flat_light.light.edge_v = flat_light.light.edge_u;
+    for (bad, field) in [(same_point, "camera.target"), (flat_light, "light")] {
+        let Err(err) = renderer.render(ctx(), &gpu_scene, &bad, &settings) else {
+            panic!("a degenerate view ({field}) must be refused");
+        };
+        let message = err.to_string();
+        assert!(
+            matches!(err, penumbra::Error::InvalidInput { .. }) && message.contains(field),
+            "{message}"
         );
     }
 }

@@ -23,7 +23,7 @@ use penumbra::reference::primary_mft::{ITERATION_BUDGET, primary_mft_gbuffer};
 use penumbra::scene::Scene;
 use penumbra::view::Camera;
 use support::gpu::{ctx, embedded, variants};
-use support::{Rng, random_soup, scene_from_triangles};
+use support::{Rng, near_miss_column, random_soup, scene_from_triangles};
 
 /// A scene, its BVH and a camera for one image size.
 struct Case {
@@ -425,10 +425,10 @@ fn running_out_of_iterations_is_an_error() {
         err.to_string().contains("ran out of their loop iterations"),
         "per-ray: {err}"
     );
-    assert!(
-        PrimaryPass::with_iteration_budget(ctx(), PrimaryTracer::Mft, None, false, 70_000).is_err(),
-        "a budget past lavapipe's loop limit is refused"
-    );
+    // A budget past lavapipe's loop limit is allowed (a loop the driver ends is then an
+    // error: a_loop_the_driver_ends_is_an_error_never_a_wrong_gbuffer); none at all is not.
+    let err = PrimaryPass::with_iteration_budget(ctx(), PrimaryTracer::Mft, None, false, 0).unwrap_err();
+    assert!(matches!(err, penumbra::Error::InvalidValue { .. }), "{err:?}");
 }
 
 /// A renderer whose multi-frusta primary vectors run out of loop iterations does not
@@ -493,5 +493,61 @@ fn a_renderer_falls_back_to_per_ray_when_a_vector_runs_out() {
             fallback.primary_fallback_pixels,
             w * h
         );
+    }
+}
+
+/// A budget far above lavapipe's loop limit on camera rays that need more passes than the
+/// limit (200,000 near misses before the blocker, [`near_miss_column`], seen from above):
+/// where the driver ends the loop, the pass reports an error naming the pass; where it
+/// does not, every pixel sees the blocker, as in the CPU twin. Never a silent miss.
+#[test]
+fn a_loop_the_driver_ends_is_an_error_never_a_wrong_gbuffer() {
+    let scene = scene_from_triangles(&near_miss_column(200_000, 0.5), &[[0.8; 3], [0.3; 3]]);
+    let camera = Camera {
+        eye: Vec3::new(0.0, 12.0, 0.0),
+        target: Vec3::ZERO,
+        up: Vec3::NEG_Z,
+        fov_y_degrees: 0.2,
+    };
+    let case = Case::new(
+        "near-miss column",
+        scene,
+        &camera,
+        &BvhSettings::default(),
+        (16, 16),
+    );
+    let twin = penumbra::reference::primary::primary_gbuffer(&case.bvh, &case.shading(), &case.cam);
+    let blocker: Vec<u32> = (0..case.bvh.triangles.len() as u32)
+        .filter(|&i| (2..4).contains(&case.bvh.triangles[i as usize].scene_index))
+        .collect();
+    assert!(
+        twin.iter().all(|t| blocker.contains(&t.triangle)),
+        "every CPU camera ray hits the blocker"
+    );
+    let mut runs = vec![(PrimaryTracer::PerRay, None)];
+    runs.extend(variants().into_iter().map(|v| (PrimaryTracer::Mft, Some(v))));
+    for (tracer, variant) in runs {
+        let pass = PrimaryPass::with_iteration_budget(ctx(), tracer, variant, false, 1 << 30).unwrap();
+        let label = format!("{tracer:?} {variant:?}");
+        let (gbuffer, result) = gpu_gbuffer(&pass, &case);
+        match result {
+            Err(e) => {
+                let message = e.to_string();
+                eprintln!("{label}: {message}");
+                assert!(
+                    message.contains("primary pass") && message.contains("ended"),
+                    "{label}: the error must name the pass and say its loop was ended: {message}"
+                );
+            }
+            Ok(_) => {
+                eprintln!("{label}: the driver did not end the loop");
+                let wrong = gbuffer
+                    .iter()
+                    .zip(&twin)
+                    .filter(|(g, t)| g.triangle != t.triangle)
+                    .count();
+                assert_eq!(wrong, 0, "{label}: {wrong} texels from a traversal cut short");
+            }
+        }
     }
 }

@@ -11,7 +11,7 @@ use penumbra::gpu::{
 };
 use penumbra::reference::shadow::{ITERATION_BUDGET, shadow_params};
 use support::assert_masks_match_oracle;
-use support::gpu::{ctx, embedded, trace_masks, variants};
+use support::gpu::{assert_same_rays, ctx, embedded, trace_masks, variants};
 
 #[test]
 fn shadow_masks_match_the_per_ray_oracle_for_every_variant() {
@@ -38,7 +38,16 @@ fn shadow_masks_match_the_per_ray_oracle_for_every_variant() {
             );
             match &first {
                 None => first = Some(frame.masks.clone()),
-                Some(m) => assert_eq!(m, &frame.masks, "{}: variants differ", s.name),
+                Some(m) => assert_same_rays(
+                    &format!("{}: subgroup vs workgroup", s.name),
+                    m,
+                    &frame.masks,
+                    &scene,
+                    &bvh,
+                    &view,
+                    gbuffer,
+                    w,
+                ),
             }
         }
     }

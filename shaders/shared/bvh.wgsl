@@ -11,14 +11,16 @@ struct BvhNode {
     count: u32,       // bytes 28..32: triangle count; 0 marks an inner node
 }
 
-// One triangle as the intersection test wants it, 48 bytes: a corner and the
-// two edges from it. Shading data lives in other buffers, indexed alike.
+// One triangle, 48 bytes: its three corners as the scene gives them, so that the
+// copies of a vertex that several triangles share are the same bits (the frusta's edge
+// functions are then exactly negated across a shared edge). Shading data lives in other
+// buffers, indexed alike.
 struct BvhTriangle {
     v0: vec3<f32>,         // bytes 0..12: corner 0
     scene_index: u32,      // bytes 12..16: index of the triangle in the loaded scene
-    e1: vec3<f32>,         // bytes 16..28: corner 1 - corner 0
+    v1: vec3<f32>,         // bytes 16..28: corner 1
     pad1: u32,             // bytes 28..32: unused
-    e2: vec3<f32>,         // bytes 32..44: corner 2 - corner 0
+    v2: vec3<f32>,         // bytes 32..44: corner 2
     pad2: u32,             // bytes 44..48: unused
 }
 

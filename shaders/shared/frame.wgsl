@@ -84,6 +84,21 @@ struct ShadeParams {
     height: u32,              // bytes 44..48
 }
 
+// Shadow-ray origins leave the surface along `normal` by the scene's `ray_offset` (a
+// fraction of its size) or by this many steps of f32 at the point's largest coordinate,
+// whichever is larger: far from the origin the hit point itself is only known to a step
+// or two, and a fixed offset below that lets rays hit their own surface. Twin:
+// frame::ORIGIN_OFFSET_ULPS (a test checks they agree).
+const ORIGIN_OFFSET_ULPS: f32 = 4.0;
+
+// The shadow-ray origin of the surface point `point`; twin of frame::shadow_ray_origin.
+fn shadow_ray_origin(point: vec3<f32>, normal: vec3<f32>, ray_offset: f32) -> vec3<f32> {
+    let m = max(max(abs(point.x), abs(point.y)), abs(point.z));
+    // The spacing of f32 values at m: 2^(m's exponent) * 2^-23.
+    let ulp = bitcast<f32>(bitcast<u32>(m) & 0x7f800000u) * (1.0 / 8388608.0);
+    return point + normal * max(ray_offset, ORIGIN_OFFSET_ULPS * ulp);
+}
+
 // Irradiance from the light treated as a point at its centre, with its area and both
 // cosines, before shadowing; the shade pass and refine_trace multiply it by the visible
 // fraction. CPU twin: reference::shade::unshadowed_irradiance.

@@ -21,11 +21,14 @@ fn intersect_box(origin: vec3<f32>, inv_dir: vec3<f32>, node: BvhNode, t_max: f3
     return select(-1.0, t_near, t_near <= t_far);
 }
 
-// Moller-Trumbore: (t, u, v) of a hit with 0 < t < t_max, or t = -1.
+// Moller-Trumbore: (t, u, v) of a hit with 0 < t < t_max, or t = -1. Not watertight:
+// a ray through a shared edge can miss both triangles (see reference::intersect).
 fn intersect_triangle(tri: BvhTriangle, origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> vec3<f32> {
     let miss = vec3<f32>(-1.0, 0.0, 0.0);
-    let p = cross(dir, tri.e2);
-    let det = dot(tri.e1, p);
+    let e1 = tri.v1 - tri.v0;
+    let e2 = tri.v2 - tri.v0;
+    let p = cross(dir, e2);
+    let det = dot(e1, p);
     if det == 0.0 {
         return miss;
     }
@@ -35,12 +38,12 @@ fn intersect_triangle(tri: BvhTriangle, origin: vec3<f32>, dir: vec3<f32>, t_max
     if u < 0.0 || u > 1.0 {
         return miss;
     }
-    let q = cross(s, tri.e1);
+    let q = cross(s, e1);
     let v = dot(dir, q) * inv_det;
     if v < 0.0 || u + v > 1.0 {
         return miss;
     }
-    let t = dot(tri.e2, q) * inv_det;
+    let t = dot(e2, q) * inv_det;
     if t > 0.0 && t < t_max {
         return vec3<f32>(t, u, v);
     }

@@ -8,13 +8,15 @@
 @group(0) @binding(4) var<storage, read> materials: array<GpuMaterial>;
 @group(0) @binding(5) var<storage, read_write> gbuffer: array<GBufferTexel>;
 // 8 words (shared/counters): [0] pixels whose rays ran out of loop iterations
-// (the host reports an error), [1..6] the work counters.
+// (the host reports an error), [1..6] the work counters, [6] rays (per-ray) or
+// vectors (multi-frusta) whose loop the driver ended (an error too).
 @group(0) @binding(6) var<storage, read_write> status: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read> textures: array<GpuTexture>;
 @group(0) @binding(8) var<storage, read> texels: array<vec4<f32>>;
 
-// Below lavapipe's 65,535 loop iterations per invocation (all loops counted);
-// the host lowers it only to test the overflow report.
+// Below lavapipe's 65,535 loop iterations per invocation (all loops counted; the
+// kernels have no other loop). Tests lower it to check the overflow report, and raise
+// it past the limit to check that a loop the driver ends is reported (WORD_LOOP_CUT).
 override ITERATION_BUDGET: u32 = 60000u;
 
 // The camera ray direction through the centre of pixel (x, y); twin of frame::camera_ray.
@@ -46,7 +48,7 @@ fn gbuffer_texel(best_tri: u32, best: vec3<f32>, dir: vec3<f32>) -> GBufferTexel
     if best_tri != 0xffffffffu {
         let tri = hit_triangle(best_tri);
         let sh = shading[best_tri];
-        var geo = normalize(cross(tri.e1, tri.e2));
+        var geo = normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
         let w = 1.0 - best.y - best.z;
         let interpolated = sh.n0 * w + sh.n1 * best.y + sh.n2 * best.z;
         var normal = geo;
@@ -61,7 +63,7 @@ fn gbuffer_texel(best_tri: u32, best: vec3<f32>, dir: vec3<f32>) -> GBufferTexel
         }
         let point = camera.eye + dir * best.x;
         let uv = sh.uv0 * w + sh.uv1 * best.y + sh.uv2 * best.z;
-        texel.origin = point + geo * camera.ray_offset;
+        texel.origin = shadow_ray_origin(point, geo, camera.ray_offset);
         texel.depth = best.x * length(dir);
         texel.normal = normal;
         texel.triangle = best_tri;

@@ -56,7 +56,7 @@ fn surface_texel(params: SurfaceParams, point: vec3<f32>, shading: vec3<f32>, ge
         normal = -normal;
     }
     var texel: GBufferTexel;
-    texel.origin = point + geo * params.ray_offset;
+    texel.origin = shadow_ray_origin(point, geo, params.ray_offset);
     texel.depth = length(dir);
     texel.normal = normal;
     texel.triangle = UNKNOWN_TRIANGLE;

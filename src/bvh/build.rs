@@ -44,10 +44,11 @@ pub(super) fn build(corners: &[[Vec3; 3]], settings: &BvhSettings) -> Result<Bvh
         return Err(Error::Bvh("the scene has no triangles".into()));
     }
     if !(1..=255).contains(&settings.max_leaf_size) {
-        return Err(Error::Bvh(format!(
-            "max leaf size {} is outside 1..=255",
-            settings.max_leaf_size
-        )));
+        return Err(Error::value(
+            "BvhSettings::max_leaf_size",
+            settings.max_leaf_size,
+            "must be in 1..=255",
+        ));
     }
     if u32::try_from(corners.len()).is_err() {
         return Err(Error::Bvh(format!(
@@ -81,9 +82,9 @@ pub(super) fn build(corners: &[[Vec3; 3]], settings: &BvhSettings) -> Result<Bvh
             BvhTriangle {
                 v0: c[0],
                 scene_index: i,
-                e1: c[1] - c[0],
+                v1: c[1],
                 pad1: 0,
-                e2: c[2] - c[0],
+                v2: c[2],
                 pad2: 0,
             }
         })

@@ -45,8 +45,8 @@ impl Bvh {
             let t = &mut self.triangles[slot as usize];
             let [a, b, c] = corners[t.scene_index as usize];
             t.v0 = a;
-            t.e1 = b - a;
-            t.e2 = c - a;
+            t.v1 = b;
+            t.v2 = c;
             moved[slot as usize] = true;
         }
         let mut dirty = vec![false; self.nodes.len()];

@@ -274,11 +274,17 @@ fn cases(args: &BenchArgs) -> Result<Vec<Case>> {
             if let Some(y) = view.ground_y {
                 scene.add_ground_plane(y);
             }
+            // As render does (scene_arg::load_scene_and_view): far scenes are traced at the origin.
+            let shift = scene.recentre();
             out.push(Case {
                 name: name.clone(),
                 view_name,
                 scene,
-                view,
+                view: if shift == glam::Vec3::ZERO {
+                    view
+                } else {
+                    view.translated(-shift)
+                },
             });
         }
     };
@@ -358,7 +364,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     );
     for &leaf in &args.leaf_sizes {
         if !(1..=255).contains(&leaf) {
-            return Err(Error::Bvh(format!("--leaf-sizes: {leaf} is not in 1..=255")));
+            return Err(Error::value(
+                "--leaf-sizes",
+                leaf,
+                "each leaf size must be in 1..=255",
+            ));
         }
     }
     let cases = cases(args)?;

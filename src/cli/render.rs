@@ -213,16 +213,21 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let tracer = match (tracer, args.spp) {
         (Tracer::Reference { .. }, Some(rays)) if (1..=65_535).contains(&rays) => Tracer::Reference { rays },
         (Tracer::Reference { .. }, Some(rays)) => {
-            return Err(penumbra::Error::Gpu(format!(
-                "--spp {rays}: the reference tracer takes 1 to 65535 rays per pixel"
-            )));
+            return Err(penumbra::Error::value(
+                "--spp",
+                rays,
+                "the reference tracer takes 1 to 65535 rays per pixel",
+            ));
         }
         (tracer, None) | (tracer, Some(16)) => tracer,
         (tracer, Some(spp)) => {
-            return Err(penumbra::Error::Gpu(format!(
-                "--spp {spp}: the {tracer} tracer traces exactly 16 rays per pixel \
-                 (use --tracer reference for other counts)"
-            )));
+            return Err(penumbra::Error::value(
+                "--spp",
+                spp,
+                format!(
+                    "the {tracer} tracer traces exactly 16 rays per pixel (use --tracer reference for other counts)"
+                ),
+            ));
         }
     };
     let ext = args
@@ -310,32 +315,25 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let wall = start.elapsed().as_secs_f64();
 
     let hits = frame.masks.iter().filter(|&&m| m & MASK_SKY == 0).count() as f64;
-    for (pass, ms) in [
-        ("primary", frame.pass_ms("primary")),
-        ("shadow", frame.pass_ms("shadow")),
-        ("shade", frame.pass_ms("shade")),
-        ("filter", frame.pass_ms("filter")),
-    ] {
-        println!("{pass:<9} {ms:>9.2} ms GPU");
+    for pass in ["primary", "shadow", "shade", "filter"] {
+        println!("{pass:<9} {}", gpu_ms(frame.timed_ms(pass)));
     }
     if args.refine {
         let refined = frame.refined.iter().filter(|&&r| r).count();
         println!(
-            "refine    {:>9.2} ms GPU: {refined} px ({:.1} % of those with geometry) traced all 256 rays",
-            frame.pass_ms("refine"),
+            "refine    {}: {refined} px ({:.1} % of those with geometry) traced all 256 rays",
+            gpu_ms(frame.timed_ms("refine")),
             100.0 * refined as f64 / hits.max(1.0)
         );
     }
-    let shadow_ms = frame.pass_ms("shadow");
+    let rate = match frame.timed_ms("shadow") {
+        Some(ms) if ms > 0.0 => format!("{:.2}", hits * rays_per_pixel / (ms * 1e3)),
+        _ => "n/a".to_owned(),
+    };
     println!(
-        "rays      {:.2} M shadow rays ({} px with geometry x {rays_per_pixel}), {:.2} Mrays/s in the shadow pass",
+        "rays      {:.2} M shadow rays ({} px with geometry x {rays_per_pixel}), {rate} Mrays/s in the shadow pass",
         hits * rays_per_pixel / 1e6,
         hits,
-        if shadow_ms > 0.0 {
-            hits * rays_per_pixel / (shadow_ms * 1e3)
-        } else {
-            f64::NAN
-        }
     );
     println!(
         "frame     {wall:.2} s wall (with readback); {} shadow dispatches, {} tile suspensions",
@@ -378,4 +376,22 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// A pass's GPU time for the report: milliseconds, or `n/a` where the adapter has no
+/// timestamp queries (a 0 would read as a measurement).
+fn gpu_ms(ms: Option<f64>) -> String {
+    match ms {
+        Some(ms) => format!("{ms:>9.2} ms GPU"),
+        None => format!("{:>9} (no GPU timestamps on this adapter)", "n/a"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn untimed_passes_print_as_not_available() {
+        assert_eq!(super::gpu_ms(Some(1.5)), "     1.50 ms GPU");
+        assert!(super::gpu_ms(None).trim_start().starts_with("n/a"));
+    }
 }

@@ -41,7 +41,8 @@ pub fn builtin_names() -> String {
 
 /// The scene and view a command works on: the scene argument (see [`load_scene`]),
 /// the view file if given, else the built-in scene's view, else one made from the
-/// scene's bounds; with the view's ground plane added and load warnings printed.
+/// scene's bounds; with the view's ground plane added, both moved to the origin when the
+/// scene lies far from it ([`Scene::recentre`]; a note says so), and load warnings printed.
 pub fn load_scene_and_view(scene_arg: Option<&Path>, view_arg: Option<&Path>) -> Result<(Scene, View)> {
     let mut scene = load_scene(scene_arg)?;
     let view = match (view_arg, builtin_view(scene_arg)) {
@@ -59,8 +60,20 @@ pub fn load_scene_and_view(scene_arg: Option<&Path>, view_arg: Option<&Path>) ->
             view
         }
     };
+    let mut view = view;
     if let Some(y) = view.ground_y {
         scene.add_ground_plane(y);
+    }
+    let shift = scene.recentre();
+    if shift != glam::Vec3::ZERO {
+        view = view.translated(-shift);
+        eprintln!(
+            "note: {}: the scene lies {:.0} from the origin; it is traced moved by {:?} so that \
+             f32 keeps its precision (images are the same as seen from the view)",
+            scene.source.display(),
+            shift.length(),
+            -shift
+        );
     }
     for w in scene.warnings.messages() {
         eprintln!("warning: {}: {w}", scene.source.display());

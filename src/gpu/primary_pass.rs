@@ -10,11 +10,13 @@
 //! block's rays crossing tens of thousands of boxes: an 8×8 image of Sponza), so
 //! the pass reports it rather than suspending and resuming as the shadow pass
 //! does, and the [`Renderer`](super::Renderer) then traces the frame's camera
-//! rays again with the per-ray kernel, whose loop bound is per ray.
+//! rays again with the per-ray kernel, whose loop bound is per ray. A loop that
+//! ends any other way (the driver ended it: a budget above its limit) is counted
+//! in status word [`WORD_LOOP_CUT`] and is an [`Error::LoopCut`].
 
 use super::kernel::{Binding, Checks, Kernel, uniform_buffer};
 use super::{GpuContext, GpuScene, GpuTimer, VectorVariant, read_buffer};
-use crate::counters::{Counters, STATUS_WORDS, WORD_STATUS};
+use crate::counters::{Counters, STATUS_WORDS, WORD_LOOP_CUT, WORD_STATUS};
 use crate::layout::CameraParams;
 use crate::reference::primary_mft::{BLOCK, ITERATION_BUDGET};
 use crate::{Error, Result};
@@ -45,13 +47,33 @@ impl std::fmt::Display for PrimaryTracer {
 pub struct PrimaryStatus {
     /// Pixels whose rays ran out of loop iterations (their texels are incomplete).
     pub overflow_pixels: u32,
+    /// Rays (per-ray) or vectors (multi-frusta) whose loop the driver ended before it
+    /// finished or ran out of budget (their texels are incomplete).
+    pub loop_cut: u32,
+    /// The pass's name and iteration budget, for the errors.
+    pub pass: PrimaryTracer,
+    /// The iteration budget the pass ran with.
+    pub budget: u32,
     /// The work counters, when the pass was built with counters on.
     pub counters: Option<Counters>,
 }
 
 impl PrimaryStatus {
-    /// The counters, or an error when a ray ran out of loop iterations.
+    /// The counters, or an error when a loop was ended by the driver or a ray ran out of
+    /// loop iterations.
     pub fn check(self) -> Result<Option<Counters>> {
+        if self.loop_cut != 0 {
+            return Err(Error::LoopCut {
+                pass: format!("primary pass ({})", self.pass),
+                count: self.loop_cut.into(),
+                units: match self.pass {
+                    PrimaryTracer::PerRay => "rays",
+                    PrimaryTracer::Mft => "vectors",
+                }
+                .into(),
+                budget: self.budget,
+            });
+        }
         if self.overflow_pixels != 0 {
             return Err(Error::Gpu(format!(
                 "primary pass: the camera rays of {} pixels ran out of their loop iterations \
@@ -71,6 +93,7 @@ pub struct PrimaryPass {
     variant: Option<VectorVariant>,
     vectors_per_workgroup: u32,
     counters: bool,
+    budget: u32,
 }
 
 impl PrimaryPass {
@@ -87,8 +110,9 @@ impl PrimaryPass {
     }
 
     /// [`PrimaryPass::new`] with the loop iterations a ray (per-ray) or a vector
-    /// (multi-frusta) may run lowered to `budget` (1..=60,000), so that tests can drive
-    /// the overflow report on small scenes.
+    /// (multi-frusta) may run set to `budget` (at least 1): lower, tests drive the
+    /// overflow report on small scenes; above the driver's loop limit (lavapipe: 65,535),
+    /// a loop it ends is reported as [`Error::LoopCut`].
     pub fn with_iteration_budget(
         ctx: &GpuContext,
         tracer: PrimaryTracer,
@@ -96,11 +120,12 @@ impl PrimaryPass {
         counters: bool,
         budget: u32,
     ) -> Result<PrimaryPass> {
-        if !(1..=ITERATION_BUDGET).contains(&budget) {
-            return Err(Error::Gpu(format!(
-                "primary pass: iteration budget {budget} outside 1..={ITERATION_BUDGET} \
-                 (lavapipe ends loops after 65,535 iterations)"
-            )));
+        if budget == 0 {
+            return Err(Error::value(
+                "primary pass iteration budget",
+                budget,
+                "must be at least 1",
+            ));
         }
         let mut constants: Vec<(&str, f64)> = vec![
             ("COUNTERS", f64::from(u8::from(counters))),
@@ -140,6 +165,7 @@ impl PrimaryPass {
             variant,
             vectors_per_workgroup,
             counters,
+            budget,
         })
     }
 
@@ -231,6 +257,9 @@ impl PrimaryPass {
             .map_err(|_| Error::Gpu("primary status: short read".into()))?;
         Ok(PrimaryStatus {
             overflow_pixels: words[WORD_STATUS],
+            loop_cut: words[WORD_LOOP_CUT],
+            pass: self.tracer,
+            budget: self.budget,
             counters: self.counters.then(|| Counters::from_status_words(&words)),
         })
     }

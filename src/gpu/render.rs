@@ -107,11 +107,15 @@ impl Frame {
 
     /// GPU milliseconds of the pass `name`, summed over its dispatches (0 when not timed).
     pub fn pass_ms(&self, name: &str) -> f64 {
-        self.timings
-            .iter()
-            .filter(|(n, _)| n == name)
-            .map(|(_, ms)| ms)
-            .sum()
+        self.timed_ms(name).unwrap_or(0.0)
+    }
+
+    /// [`Frame::pass_ms`], or `None` when no dispatch of `name` was timed (the adapter has
+    /// no timestamp queries, or the pass did not run).
+    pub fn timed_ms(&self, name: &str) -> Option<f64> {
+        let mut times = self.timings.iter().filter(|(n, _)| n == name).peekable();
+        times.peek()?;
+        Some(times.map(|(_, ms)| ms).sum())
     }
 }
 
@@ -140,8 +144,10 @@ pub struct RendererOptions {
     pub shrink: bool,
     /// Which kernel traces the camera rays.
     pub primary: PrimaryTracer,
-    /// Loop iterations a multi-frusta primary vector may run (1..=60,000, the default);
-    /// a frame where one runs out is traced again by the per-ray kernel (tests lower it).
+    /// Loop iterations a multi-frusta primary vector may run (at least 1; 60,000 by
+    /// default, below lavapipe's loop limit); a frame where one runs out is traced again
+    /// by the per-ray kernel (tests lower it), one where the driver ends a loop (a budget
+    /// above its limit) is an [`Error::LoopCut`].
     pub primary_iteration_budget: u32,
 }
 
@@ -308,10 +314,14 @@ impl Renderer {
     ) -> Result<Frame> {
         let (w, h) = (settings.width, settings.height);
         if w == 0 || h == 0 {
-            return Err(Error::Gpu(format!(
-                "image size {w}x{h}: both sides must be at least 1"
-            )));
+            return Err(Error::value(
+                "FrameSettings image size",
+                format!("{w}x{h}"),
+                "both sides must be at least 1",
+            ));
         }
+        view.validate()
+            .map_err(|message| Error::invalid("Renderer::render view", message))?;
         if settings.refine && settings.filter.is_none() {
             return Err(Error::invalid(
                 "FrameSettings::refine",
@@ -429,7 +439,7 @@ impl Renderer {
         if let Some(fallback) = self
             .primary_fallback
             .as_ref()
-            .filter(|_| primary_status.overflow_pixels > 0)
+            .filter(|_| primary_status.overflow_pixels > 0 && primary_status.loop_cut == 0)
         {
             // Frusta as wide as a small image's blocks can meet most of a big scene; the
             // per-ray kernel's loop bound is per ray, so it still traces them.

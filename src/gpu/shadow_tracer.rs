@@ -6,10 +6,13 @@
 //! reaches its budget saves its traversal state and stops, and the pass
 //! dispatches again to resume the suspended tiles until none is left. So a
 //! tile with any amount of work gets the same answer as an uninterrupted one.
+//! A loop that ends any other way (a budget above the driver's limit) is counted
+//! in the status word [`WORD_LOOP_CUT`] and the pass fails with [`Error::LoopCut`].
 
 use super::kernel::{Binding, Checks, Kernel, uniform_buffer, uniform_buffer_on};
 pub use super::tracer::Tracer;
 use super::{AdapterSummary, GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer};
+use crate::counters::{WORD_LOOP_CUT, WORD_STATUS};
 use crate::layout::ShadowParams;
 use crate::reference::counters::{Counters, STATUS_WORDS};
 use crate::{Error, Result};
@@ -20,6 +23,9 @@ pub(crate) const STATE_WORDS: u64 = 176;
 /// Tiles per dispatch along each axis: 128×128 tiles = 512×512 pixels, so
 /// the state buffer stays at 10 MiB and no dispatch runs for long.
 pub(crate) const CHUNK_TILES: u32 = 128;
+/// `u32` counts per chunk in [`ShadowScratch::unfinished`]: tiles still suspended after
+/// the last resume round, tiles whose loop the driver ended.
+pub const UNFINISHED_WORDS: u64 = 2;
 /// Resume rounds after which the pass gives up (a bug, not a scene, could cause it).
 const MAX_ROUNDS: u32 = 10_000;
 
@@ -405,17 +411,30 @@ impl ShadowTracer {
                 stats.dispatches += 1;
                 let words = read_buffer::<u32>(ctx, &status, 0..(STATUS_WORDS * 4) as u64)?;
                 stats.counters += Counters::from_status_words(&words);
-                if words[0] == 0 {
+                if words[WORD_LOOP_CUT] != 0 {
+                    return Err(Error::LoopCut {
+                        pass: format!("shadow pass ({})", self.tracer),
+                        count: words[WORD_LOOP_CUT].into(),
+                        units: if self.tracer.uses_vector() {
+                            "vectors"
+                        } else {
+                            "rays"
+                        }
+                        .into(),
+                        budget: params.iteration_budget,
+                    });
+                }
+                if words[WORD_STATUS] == 0 {
                     break;
                 }
                 if !self.tracer.uses_vector() {
                     return Err(Error::Gpu(format!(
                         "shadow pass ({}): {} rays ran out of their {} loop iterations \
                              (BVH too deep or degenerate)",
-                        self.tracer, words[0], params.iteration_budget
+                        self.tracer, words[WORD_STATUS], params.iteration_budget
                     )));
                 }
-                stats.suspensions += u64::from(words[0]);
+                stats.suspensions += u64::from(words[WORD_STATUS]);
             }
             units_done += u64::from(units);
             progress(units_done, total_units);
@@ -427,10 +446,12 @@ impl ShadowTracer {
     /// Records the whole shadow pass into `encoder` without waiting on the GPU, for hosts
     /// that submit it with their own frame: each chunk of tiles gets its first dispatch and
     /// then `resume_rounds` resume dispatches (a resume dispatch over a chunk with nothing
-    /// suspended costs one early exit per tile). The tiles still suspended after a chunk's
-    /// last round are counted into `unfinished[chunk]` (`u32`s, one per chunk, see
-    /// [`ShadowTracer::chunks`]); a non-zero count means the masks of those tiles are
-    /// incomplete and `resume_rounds` was too small for this scene and view.
+    /// suspended costs one early exit per tile). The first dispatch starts every tile
+    /// afresh, whatever earlier records left in `scratch`. Per chunk (see
+    /// [`ShadowTracer::chunks`]), two `u32`s of `unfinished` count the tiles still
+    /// suspended after the chunk's last round (`resume_rounds` was too small for this
+    /// scene and view) and the tiles whose loop the driver ended (an iteration budget
+    /// above its limit); a non-zero count means the masks of those tiles are incomplete.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -450,12 +471,16 @@ impl ShadowTracer {
             encoder.clear_buffer(masks, 0, None);
             0
         };
+        let word = |w: usize| (w * 4) as u64;
         for (chunk_index, mut p) in (0u64..).zip(self.chunk_params(params)) {
             let groups = self.groups(p.tiles_x * p.tiles_y);
+            // Loops cut short add up over the chunk's rounds; suspensions count only in
+            // its last round (what is left then stays unfinished).
+            encoder.clear_buffer(&scratch.status, 0, None);
             for round in 0..=resume_rounds {
                 p.resume = u32::from(round > 0);
                 if round == resume_rounds {
-                    encoder.clear_buffer(&scratch.status, 0, None);
+                    encoder.clear_buffer(&scratch.status, word(WORD_STATUS), Some(4));
                 }
                 let params_buf = uniform_buffer_on(device, "shadow params", &p);
                 let bind = self.kernel.bind_on(
@@ -473,12 +498,21 @@ impl ShadowTracer {
                 );
                 self.kernel.record(encoder, "shadow/trace", &bind, None, groups);
             }
-            encoder.copy_buffer_to_buffer(&scratch.status, 0, &scratch.unfinished, chunk_index * 4, 4);
+            let out = chunk_index * UNFINISHED_WORDS * 4;
+            encoder.copy_buffer_to_buffer(&scratch.status, word(WORD_STATUS), &scratch.unfinished, out, 4);
+            encoder.copy_buffer_to_buffer(
+                &scratch.status,
+                word(WORD_LOOP_CUT),
+                &scratch.unfinished,
+                out + 4,
+                4,
+            );
         }
     }
 
-    /// Chunks of tiles a `width`×`height` image is traced in by the MFT tracer (one
-    /// `unfinished` count each; the one-pixel tracers need more, see [`ShadowScratch::new`]).
+    /// Chunks of tiles a `width`×`height` image is traced in by the MFT tracer
+    /// ([`UNFINISHED_WORDS`] `unfinished` counts each; the one-pixel tracers need more, see
+    /// [`ShadowScratch::new`]).
     pub fn chunks(width: u32, height: u32) -> u64 {
         let (tiles_x, tiles_y) = (width.div_ceil(4), height.div_ceil(4));
         u64::from(tiles_x.div_ceil(CHUNK_TILES)) * u64::from(tiles_y.div_ceil(CHUNK_TILES))
@@ -494,7 +528,8 @@ pub struct ShadowScratch {
     pub state: wgpu::Buffer,
     /// `[0]`: tiles suspended by the dispatch just run.
     pub status: wgpu::Buffer,
-    /// `u32` per chunk: tiles still suspended after the chunk's last round.
+    /// [`UNFINISHED_WORDS`] `u32`s per chunk: tiles still suspended after the chunk's last
+    /// round, tiles whose loop the driver ended.
     pub unfinished: wgpu::Buffer,
 }
 
@@ -515,7 +550,8 @@ impl ShadowScratch {
             state: buffer(
                 "shadow state",
                 tiles * STATE_WORDS * 4,
-                wgpu::BufferUsages::empty(),
+                // Readable so that tests can compare the saved state with the CPU twin's.
+                wgpu::BufferUsages::COPY_SRC,
             ),
             status: buffer(
                 "shadow status",
@@ -524,7 +560,10 @@ impl ShadowScratch {
             ),
             unfinished: buffer(
                 "shadow unfinished tiles",
-                u64::from(width.div_ceil(CHUNK_TILES)) * u64::from(height.div_ceil(CHUNK_TILES)) * 4,
+                u64::from(width.div_ceil(CHUNK_TILES))
+                    * u64::from(height.div_ceil(CHUNK_TILES))
+                    * UNFINISHED_WORDS
+                    * 4,
                 wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             ),
         }

@@ -23,7 +23,7 @@
 
 use super::GpuContext;
 use super::buffers::map_read;
-use crate::Result;
+use crate::{Error, Result};
 
 /// Timestamps at the start and end of up to `capacity` labelled compute passes.
 ///
@@ -36,6 +36,8 @@ pub struct GpuTimer {
     /// Labels of the passes recorded since the last read, in query order.
     labels: Vec<String>,
     capacity: u32,
+    /// Passes asked for since the last read that found every slot taken.
+    dropped: u32,
 }
 
 #[derive(Debug)]
@@ -81,6 +83,7 @@ impl GpuTimer {
             queries,
             labels: Vec::new(),
             capacity,
+            dropped: 0,
         }
     }
 
@@ -91,11 +94,13 @@ impl GpuTimer {
 
     /// Timestamp writes for a compute pass named `label`, to put in its
     /// [`wgpu::ComputePassDescriptor`]. `None` when timestamps are unsupported or all
-    /// `capacity` slots are taken (that pass is then not timed).
+    /// `capacity` slots are taken: that pass is then not timed, and [`GpuTimer::read`]
+    /// fails rather than return timings that leave it out.
     pub fn pass_writes(&mut self, label: &str) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
         let queries = self.queries.as_ref()?;
-        let index = u32::try_from(self.labels.len()).ok()?;
+        let index = u32::try_from(self.labels.len()).unwrap_or(u32::MAX);
         if index >= self.capacity {
+            self.dropped += 1;
             return None;
         }
         self.labels.push(label.to_owned());
@@ -126,7 +131,26 @@ impl GpuTimer {
     ///
     /// Call after submitting the encoder given to [`GpuTimer::resolve`]. An end timestamp
     /// before its start (allowed by WebGPU, e.g. after a clock change) reads as 0 ms.
+    ///
+    /// Errors ([`Error::InvalidValue`]) when more passes asked for timestamps than the
+    /// timer holds: sums over the timings would silently leave those passes out.
     pub fn read(&mut self, ctx: &GpuContext) -> Result<Vec<(String, f64)>> {
+        let dropped = std::mem::take(&mut self.dropped);
+        if dropped > 0 {
+            let asked = self.labels.len() as u64 + u64::from(dropped);
+            self.labels.clear();
+            if let Some(q) = self.queries.as_mut() {
+                q.n_resolved = 0;
+            }
+            return Err(Error::value(
+                "timed passes",
+                asked,
+                format!(
+                    "this timer holds {} (at most 2048); {dropped} passes were not timed",
+                    self.capacity
+                ),
+            ));
+        }
         let labels = std::mem::take(&mut self.labels);
         let Some(queries) = self.queries.as_mut() else {
             return Ok(Vec::new());

@@ -169,9 +169,8 @@ impl Beam {
     /// (positive inside); `None` when it hides nothing (outside the frustum,
     /// outside the slab, or seen edge-on).
     fn shadow_of(&self, tri: &BvhTriangle) -> Option<Vec<Line>> {
-        let v0 = tri.v0.as_dvec3();
-        // f64 sums of f32 values: exactly the triangle Möller–Trumbore intersects.
-        let verts = [v0, v0 + tri.e1.as_dvec3(), v0 + tri.e2.as_dvec3()];
+        // The stored corners, exactly.
+        let verts = [tri.v0.as_dvec3(), tri.v1.as_dvec3(), tri.v2.as_dvec3()];
         if self.planes.iter().any(|p| verts.iter().all(|&x| p.eval(x) < 0.0)) {
             return None;
         }

@@ -28,8 +28,8 @@ pub const SHRINK_MARGIN: f32 = 1.0 / 1024.0;
 /// Marks a frustum's `shrunk_for` as set.
 pub const SHRINK_FLAG: u32 = 1 << 31;
 /// Widening of a frustum's bounding box, relative to the size of its
-/// coordinates: far above the rounding of a triangle stored as corner + edges,
-/// which may lie a few ulps outside the box built from its corners.
+/// coordinates: its corners are rounded to f32, so the box of the rounded
+/// corners may miss a few ulps of the exact pyramid; 2⁻¹⁸ is far above that.
 pub const BOUNDS_PAD: f32 = 1.0 / 262_144.0;
 
 /// The box around the origin and the light rectangle's corners, widened by [`BOUNDS_PAD`].
@@ -135,6 +135,14 @@ impl Frustum {
         }
     }
 
+    /// The lane of a tile pixel outside the image: done from the start, like a sky pixel.
+    pub fn outside() -> Frustum {
+        Frustum {
+            occluded: MASK_SKY,
+            ..Default::default()
+        }
+    }
+
     /// Frustum shrinking, the paper's "CR" (§5.3): recomputes the corner rays
     /// through the corners of the light-plane rectangle (s, t ranges, widened by
     /// [`SHRINK_MARGIN`]) that holds the samples not yet blocked in `blocked`. Rays
@@ -216,15 +224,17 @@ pub enum TriangleOutcome {
 /// `m2 = a2×a0` and `D = m0·a2` (six times the signed volume of the
 /// tetrahedron origin–triangle): the ray to light point `p` passes through the
 /// triangle when the `m_e·(p − origin)` all have the sign of `D` (edges
-/// inclusive: a shared edge gives exactly negated normals to its two
-/// triangles), and it reaches the triangle's plane at `t = D / Σ m_e·(p −
+/// inclusive: a shared edge, whose corners the two triangles store as the
+/// same bits, gives them exactly negated normals and edge functions, so a ray
+/// on it hits both and none slips between them — tested on a closed room in
+/// `tests/shadow_cpu.rs`), and it reaches the triangle's plane at `t = D / Σ m_e·(p −
 /// origin)`, so it hits when `|D| < t_max·|Σ m_e·(p − origin)|`. With `p = c0 +
 /// s·eu + t·ev` each `m_e·(p − origin)` is an edge function `a + b·s + c·t` of
 /// the sample's light coordinates: three dot products per edge and triangle,
 /// then two multiply-adds per edge and ray.
 pub fn frustum_test_triangle(f: &Frustum, tri: &BvhTriangle, params: &ShadowParams) -> TriangleOutcome {
     let o = f.origin;
-    let (v0, v1, v2) = (tri.v0, tri.v0 + tri.e1, tri.v0 + tri.e2);
+    let (v0, v1, v2) = (tri.v0, tri.v1, tri.v2);
     let (a0, a1, a2) = (v0 - o, v1 - o, v2 - o);
     // Wholly outside one plane of the frustum.
     let all_outside =
@@ -319,9 +329,10 @@ pub use super::counters::Counters;
 /// do both (see `shaders/shadow_mft.wgsl`).
 #[derive(Clone, Debug, Default)]
 struct VectorState {
-    /// Inner node to visit next (when not popping).
-    node: u32,
-    /// Frusta that entered `node`.
+    /// First child of the inner node to visit next (when not popping): the kernel's
+    /// `t_children`, set only when the traversal enters an inner node.
+    children: u32,
+    /// Frusta that entered that node (or the last leaf found).
     mask: u32,
     /// Next triangle of the current leaf.
     cursor: u32,
@@ -354,12 +365,13 @@ impl VectorState {
     /// Moves to node `c` with frustum mask `m`; a leaf waits in `pending` and the
     /// traversal goes on from the stack.
     fn enter(&mut self, bvh: &Bvh, c: u32, m: u32) {
-        self.node = c;
         self.mask = m;
         let n = &bvh.nodes[c as usize];
         if n.is_leaf() {
             self.pending = Some((n.first, n.first + n.count, m));
             self.popping = true;
+        } else {
+            self.children = n.first;
         }
     }
 
@@ -415,29 +427,46 @@ pub fn trace_tile(
 }
 
 /// The next triangle of the current leaf against every frustum that entered
-/// it and is not done; returns the frusta that were left after culling.
+/// it and is not done; returns the frusta that were left after culling and the
+/// rays of each that hit it (per-lane leaves OR them in at once; transposed
+/// leaves one candidate frustum per kernel step).
 fn leaf_triangle(
     bvh: &Bvh,
     st: &mut VectorState,
-    frusta: &mut [Frustum; 16],
+    frusta: &[Frustum; 16],
     params: &ShadowParams,
     counters: &mut Counters,
-) -> u32 {
+) -> (u32, [u32; 16]) {
     let tri = &bvh.triangles[st.cursor as usize];
     st.cursor += 1;
     counters.triangles_accessed += 1;
     let mut survived = 0u32;
-    for (i, f) in frusta.iter_mut().enumerate() {
+    let mut hits = [0u32; 16];
+    for (i, f) in frusta.iter().enumerate() {
         if st.leaf_mask & (1 << i) != 0 && !f.is_done() {
-            if let TriangleOutcome::Tested(hits) = frustum_test_triangle(f, tri, params) {
+            if let TriangleOutcome::Tested(h) = frustum_test_triangle(f, tri, params) {
                 survived |= 1 << i;
-                f.occluded |= hits;
+                hits[i] = h;
             }
         }
     }
     counters.triangle_tests += u64::from(survived.count_ones());
     counters.triangles_after_culling += u64::from(survived != 0);
-    survived
+    (survived, hits)
+}
+
+/// Per-lane leaves: [`leaf_triangle`] with every survivor's hits OR-ed in.
+fn per_lane_triangle(
+    bvh: &Bvh,
+    st: &mut VectorState,
+    frusta: &mut [Frustum; 16],
+    params: &ShadowParams,
+    counters: &mut Counters,
+) {
+    let (_, hits) = leaf_triangle(bvh, st, frusta, params, counters);
+    for (f, h) in frusta.iter_mut().zip(hits) {
+        f.occluded |= h;
+    }
 }
 
 /// One step of the traversal stage, unless a found leaf waits or it is done: pop
@@ -461,7 +490,7 @@ fn traversal_step(
         }
     }
     if !st.traversal_done && st.pending.is_none() && !st.popping {
-        let l = bvh.nodes[st.node as usize].first;
+        let l = st.children;
         counters.nodes_visited += 1;
         counters.box_tests += 2;
         let mask = st.mask;
@@ -505,7 +534,8 @@ fn right_first(bvh: &Bvh, l: u32, params: &ShadowParams) -> bool {
     key(right) < key(left)
 }
 
-/// [`trace_tile`] under `options`.
+/// [`trace_tile`] under `options`: dispatch after dispatch ([`dispatch_tile`]), each
+/// suspended one resumed from the state it saved, as the GPU pass resumes its tiles.
 ///
 /// Each loop iteration is one step of the kernel, which may do, in this
 /// order: two traversal steps (each a stack pop and an inner node), one or two
@@ -513,39 +543,176 @@ fn right_first(bvh: &Bvh, l: u32, params: &ShadowParams) -> bool {
 /// `shaders/shadow_mft.wgsl` for why).
 pub fn trace_tile_with(
     bvh: &Bvh,
-    mut frusta: [Frustum; 16],
+    frusta: [Frustum; 16],
     params: &ShadowParams,
     options: &TileOptions,
     counters: &mut Counters,
 ) -> [u32; 16] {
-    if options.shrink {
-        // Start from the rectangle of the samples themselves (rays below the
-        // horizon left out): 1–7 % fewer steps on the shared scenes.
-        for f in frusta.iter_mut().filter(|f| !f.is_done()) {
-            f.shrink_to(f.occluded, params);
+    let mut run = dispatch_tile(bvh, &frusta, None, params, options, counters);
+    loop {
+        match run {
+            TileRun::Finished(masks) => return masks,
+            TileRun::Suspended(saved) => {
+                counters.suspensions += 1;
+                run = dispatch_tile(bvh, &frusta, Some(&saved), params, options, counters);
+            }
         }
     }
-    let mut st = VectorState {
-        alive: ballot(&frusta, |_, f| !f.is_done()),
-        stack: Vec::with_capacity(STACK_SIZE),
-        ..Default::default()
+}
+
+/// 32-bit words of one tile's saved state, in the layout of `shaders/shadow_mft.wgsl`
+/// (its `STATE_WORDS` and `ST_*` offsets): status, first child to visit, mask,
+/// cursor, end, alive, stack depth, flags (1: popping, 2: traversal done), 16 lane
+/// masks, 64 stack nodes, 64 stack masks, the transposed leaf's candidates, the
+/// current leaf's frusta, the pending leaf (first, end, frusta; end 0: none), 3
+/// unused words, and 16 lane words of `shrunk_for`.
+pub const STATE_WORDS: usize = 176;
+/// Word of the status ([`STATUS_SUSPENDED`] while a tile waits to be resumed).
+pub const ST_STATUS: usize = 0;
+/// First of the 16 lane masks.
+pub const ST_LANES: usize = 8;
+/// First of the stack's nodes.
+pub const ST_STACK_NODE: usize = 24;
+/// First of the stack's frustum masks.
+pub const ST_STACK_MASK: usize = 88;
+/// The transposed leaf's candidate frusta.
+pub const ST_CAND: usize = 152;
+/// The current leaf's frusta.
+pub const ST_LEAF_MASK: usize = 153;
+/// First of the pending leaf's three words.
+pub const ST_PENDING: usize = 154;
+/// First of the 16 lane words of `shrunk_for`.
+pub const ST_SHRUNK: usize = 160;
+/// [`ST_STATUS`] of a suspended tile.
+pub const STATUS_SUSPENDED: u32 = 1;
+
+/// What one dispatch of the kernel leaves of a tile.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum TileRun {
+    /// The tile finished: its 16 occlusion masks (lane order).
+    Finished([u32; 16]),
+    /// The budget ran out: the state the kernel saves, word for word.
+    Suspended(Box<[u32; STATE_WORDS]>),
+}
+
+/// The state words the kernel saves when it suspends.
+fn save(st: &VectorState, frusta: &[Frustum; 16], cand: u32) -> Box<[u32; STATE_WORDS]> {
+    let mut w = Box::new([0u32; STATE_WORDS]);
+    w[ST_STATUS] = STATUS_SUSPENDED;
+    w[1] = st.children;
+    w[2] = st.mask;
+    w[3] = st.cursor;
+    w[4] = st.end;
+    w[5] = st.alive;
+    w[6] = st.stack.len() as u32;
+    w[7] = u32::from(st.popping) | u32::from(st.traversal_done) << 1;
+    for (i, f) in frusta.iter().enumerate() {
+        w[ST_LANES + i] = f.occluded;
+        w[ST_SHRUNK + i] = f.shrunk_for;
+    }
+    for (i, &(node, mask)) in st.stack.iter().enumerate() {
+        w[ST_STACK_NODE + i] = node;
+        w[ST_STACK_MASK + i] = mask;
+    }
+    w[ST_CAND] = cand;
+    w[ST_LEAF_MASK] = st.leaf_mask;
+    let (first, end, mask) = st.pending.unwrap_or((0, 0, 0));
+    w[ST_PENDING..ST_PENDING + 3].copy_from_slice(&[first, end, mask]);
+    w
+}
+
+/// The state a resumed dispatch starts from: the saved words read back the way the
+/// kernel reads them, into the tile's fresh frusta (each lane's mask restored and, if
+/// it had shrunk, shrunk again to the same rectangle). Returns the state, the frusta
+/// and the transposed leaf's candidates.
+fn resume(
+    saved: &[u32; STATE_WORDS],
+    fresh: &[Frustum; 16],
+    params: &ShadowParams,
+    shrink: bool,
+) -> (VectorState, [Frustum; 16], u32) {
+    let depth = saved[6] as usize;
+    let st = VectorState {
+        children: saved[1],
+        mask: saved[2],
+        cursor: saved[3],
+        end: saved[4],
+        alive: saved[5],
+        popping: saved[7] & 1 != 0,
+        traversal_done: saved[7] & 2 != 0,
+        leaf_mask: saved[ST_LEAF_MASK],
+        pending: (saved[ST_PENDING + 1] != 0)
+            .then(|| (saved[ST_PENDING], saved[ST_PENDING + 1], saved[ST_PENDING + 2])),
+        stack: (0..depth)
+            .map(|i| (saved[ST_STACK_NODE + i], saved[ST_STACK_MASK + i]))
+            .collect(),
     };
-    let root_mask = ballot(&frusta, |_, f| {
-        !f.is_done() && frustum_may_hit_box(f, &bvh.nodes[0], params)
-    });
-    counters.box_tests += 1;
-    let mut running = root_mask != 0;
-    st.enter(bvh, 0, root_mask);
+    let mut frusta = *fresh;
+    for (i, f) in frusta.iter_mut().enumerate() {
+        f.occluded = saved[ST_LANES + i];
+        let shrunk_for = saved[ST_SHRUNK + i];
+        if shrink && shrunk_for & SHRINK_FLAG != 0 {
+            f.shrink_to(shrunk_for & MASK_FULL, params);
+        }
+    }
+    (st, frusta, saved[ST_CAND])
+}
+
+/// One dispatch of the kernel over one tile: from `fresh` (the tile's frusta as
+/// [`Frustum::new`] builds them), or resumed from `saved`; runs until the tile
+/// finishes or `options.budget` steps are spent.
+pub fn dispatch_tile(
+    bvh: &Bvh,
+    fresh: &[Frustum; 16],
+    saved: Option<&[u32; STATE_WORDS]>,
+    params: &ShadowParams,
+    options: &TileOptions,
+    counters: &mut Counters,
+) -> TileRun {
     // Transposed leaves: the frusta still to be tested (one step each) against
-    // triangle cursor − 1. Their bits are already in `frusta`: each frustum's
-    // rays depend on nothing the other candidates change.
-    let mut cand = 0u32;
+    // triangle cursor − 1, and their rays that hit it, OR-ed in one frustum per step as
+    // the kernel's ballots do.
+    let mut cand_hits = [0u32; 16];
+    let (mut st, mut frusta, mut cand, mut running) = match saved {
+        Some(words) => {
+            let (st, frusta, cand) = resume(words, fresh, params, options.shrink);
+            if cand != 0 {
+                // The kernel reloads the triangle and tests the candidates left.
+                let tri = &bvh.triangles[st.cursor as usize - 1];
+                for (i, f) in frusta.iter().enumerate().filter(|(i, _)| cand & (1 << i) != 0) {
+                    if let TriangleOutcome::Tested(h) = frustum_test_triangle(f, tri, params) {
+                        cand_hits[i] = h;
+                    }
+                }
+            }
+            (st, frusta, cand, true)
+        }
+        None => {
+            let mut frusta = *fresh;
+            if options.shrink {
+                // Start from the rectangle of the samples themselves (rays below the
+                // horizon left out): 1–7 % fewer steps on the shared scenes.
+                for f in frusta.iter_mut().filter(|f| !f.is_done()) {
+                    f.shrink_to(f.occluded, params);
+                }
+            }
+            let mut st = VectorState {
+                alive: ballot(&frusta, |_, f| !f.is_done()),
+                stack: Vec::with_capacity(STACK_SIZE),
+                ..Default::default()
+            };
+            let root_mask = ballot(&frusta, |_, f| {
+                !f.is_done() && frustum_may_hit_box(f, &bvh.nodes[0], params)
+            });
+            counters.box_tests += 1;
+            st.enter(bvh, 0, root_mask);
+            (st, frusta, 0, root_mask != 0)
+        }
+    };
     let mut iterations = 0u32;
     while running {
         if iterations >= options.budget {
-            // Suspend: on the GPU the state goes to memory and the next dispatch resumes it.
-            counters.suspensions += 1;
-            iterations = 0;
+            return TileRun::Suspended(save(&st, &frusta, cand));
         }
         iterations += 1;
         counters.traversal_steps += 1;
@@ -556,23 +723,26 @@ pub fn trace_tile_with(
         // The leaf stage: up to two triangles (transposed: one, then its candidates).
         st.take_pending(cand);
         let in_leaf = cand != 0 || st.cursor < st.end;
-        if cand == 0 && st.cursor < st.end {
-            let survived = leaf_triangle(bvh, &mut st, &mut frusta, params, counters);
-            if options.transposed {
-                cand = survived;
-            }
+        if options.transposed && cand == 0 && st.cursor < st.end {
+            (cand, cand_hits) = leaf_triangle(bvh, &mut st, &frusta, params, counters);
         }
         if !options.transposed && st.cursor < st.end {
-            leaf_triangle(bvh, &mut st, &mut frusta, params, counters);
+            per_lane_triangle(bvh, &mut st, &mut frusta, params, counters);
+        }
+        if !options.transposed && st.cursor < st.end {
+            per_lane_triangle(bvh, &mut st, &mut frusta, params, counters);
         }
         if options.transposed {
-            // The kernel's inner loop: a step per candidate, and one that ends it.
+            // The kernel's inner loop: a step per candidate, lowest first, and one that
+            // ends it.
             loop {
                 iterations += 1;
                 counters.traversal_steps += 1;
                 if cand == 0 || iterations >= options.budget {
                     break;
                 }
+                let f = cand.trailing_zeros() as usize;
+                frusta[f].occluded |= cand_hits[f];
                 cand &= cand - 1;
             }
         }
@@ -589,7 +759,7 @@ pub fn trace_tile_with(
             running = false;
         }
     }
-    frusta.map(|f| f.occluded)
+    TileRun::Finished(frusta.map(|f| f.occluded))
 }
 
 /// Occlusion masks of a whole G-buffer (row-major) with multi-frusta tracing,
@@ -656,11 +826,7 @@ pub fn mft_masks_with_options(
                                 if x < w && y < h {
                                     Frustum::new(&gbuffer[y * w + x], i, light_points, params)
                                 } else {
-                                    // Outside the image: a done lane, like a sky pixel.
-                                    Frustum {
-                                        occluded: MASK_SKY,
-                                        ..Default::default()
-                                    }
+                                    Frustum::outside()
                                 }
                             });
                             out.push((

@@ -15,7 +15,8 @@ use crate::reference::Hit;
 ///
 /// Normals are flipped to the side the camera ray comes from (a back face
 /// seen by the camera is lit like a front face); the shadow-ray origin is
-/// the hit point moved `ray_offset` along the flipped geometric normal.
+/// the hit point moved off the surface along the flipped geometric normal
+/// ([`crate::frame::shadow_ray_origin`]).
 pub fn hit_texel(
     bvh: &Bvh,
     shading: &ShadingData,
@@ -31,7 +32,7 @@ pub fn hit_texel(
     };
     let tri = &bvh.triangles[hit.triangle as usize];
     let sh = &shading.triangles[hit.triangle as usize];
-    let mut geo = tri.e1.cross(tri.e2).normalize();
+    let mut geo = (tri.v1 - tri.v0).cross(tri.v2 - tri.v0).normalize();
     let w = 1.0 - hit.u - hit.v;
     let mut normal = (sh.n0 * w + sh.n1 * hit.u + sh.n2 * hit.v).normalize_or(geo);
     if geo.dot(dir) > 0.0 {
@@ -43,7 +44,7 @@ pub fn hit_texel(
     let point = cam.eye + dir * hit.t;
     let uv = sh.uv0 * w + sh.uv1 * hit.u + sh.uv2 * hit.v;
     GBufferTexel {
-        origin: point + geo * cam.ray_offset,
+        origin: crate::frame::shadow_ray_origin(point, geo, cam.ray_offset),
         depth: hit.t * dir.length(),
         normal,
         triangle: hit.triangle,

@@ -128,8 +128,8 @@ impl PixelFrustum {
     /// No ray can hit the triangle before its closest hit: depth, side planes, corner rays.
     fn culls_triangle(&self, cam: &CameraParams, tri: &BvhTriangle) -> bool {
         let a0 = tri.v0 - cam.eye;
-        let a1 = (tri.v0 + tri.e1) - cam.eye;
-        let a2 = (tri.v0 + tri.e2) - cam.eye;
+        let a1 = tri.v1 - cam.eye;
+        let a2 = tri.v2 - cam.eye;
         let f = cam.forward;
         let near = f.dot(a0).min(f.dot(a1)).min(f.dot(a2));
         if near > self.t_max * DEPTH_SLACK {

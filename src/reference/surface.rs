@@ -33,7 +33,7 @@ fn unit_or(v: Vec3, fallback: Vec3) -> Vec3 {
 
 /// The texel of surface point `point` with the host's `shading` and `geometric`
 /// normals (any length): both flipped to the camera's side, the shadow-ray origin
-/// moved `ray_offset` along the geometric normal, `depth` the eye distance. A zero
+/// moved off the surface along the geometric normal ([`crate::frame::shadow_ray_origin`]), `depth` the eye distance. A zero
 /// geometric normal falls back to the shading normal, a zero shading normal to the
 /// direction towards the eye. Albedo is left 0: the host shades.
 pub fn surface_texel(params: &SurfaceParams, point: Vec3, shading: Vec3, geometric: Vec3) -> GBufferTexel {
@@ -48,7 +48,7 @@ pub fn surface_texel(params: &SurfaceParams, point: Vec3, shading: Vec3, geometr
         normal = -normal;
     }
     GBufferTexel {
-        origin: point + geo * params.ray_offset,
+        origin: crate::frame::shadow_ray_origin(point, geo, params.ray_offset),
         depth: dir.length(),
         normal,
         triangle: GBufferTexel::UNKNOWN_TRIANGLE,

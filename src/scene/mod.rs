@@ -244,6 +244,39 @@ impl Scene {
         }
     }
 
+    /// Moves the whole scene by `offset`: every triangle corner (in f32, as a file that
+    /// stored the scene there would hold it), every instance's transform and the camera.
+    /// For georeferenced data and for checking precision far from the origin.
+    pub fn translate(&mut self, offset: Vec3) {
+        for t in &mut self.triangles {
+            for p in &mut t.positions {
+                *p += offset;
+            }
+        }
+        for i in &mut self.instances {
+            i.world_from_object = glam::Mat4::from_translation(offset) * i.world_from_object;
+        }
+        if let Some(c) = &mut self.camera {
+            *c = c.translated(offset);
+        }
+    }
+
+    /// Moves a scene that lies farther from the origin than its own diagonal to it: there
+    /// f32 steps are as fine as the scene needs, while far out (a georeferenced site at
+    /// 1e6 m has steps of 6 cm) hit points, ray origins and triangle tests all round that
+    /// coarsely. Returns the offset subtracted (the bounds' centre, as f32), or zero for a
+    /// scene near enough, which is left as it was, bit for bit. Move the view alike:
+    /// `view.translated(-offset)`. The CLI does this for every scene it loads.
+    pub fn recentre(&mut self) -> Vec3 {
+        let b = self.bounds();
+        let centre = (b.min + b.max) * 0.5;
+        if !centre.is_finite() || centre.length() <= b.diagonal() {
+            return Vec3::ZERO;
+        }
+        self.translate(-centre);
+        centre
+    }
+
     /// Bounds of all triangles.
     pub fn bounds(&self) -> Bounds {
         let mut b = Bounds::EMPTY;

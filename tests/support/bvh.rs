@@ -41,7 +41,7 @@ pub fn check_structure(corners: &[[Vec3; 3]], bvh: &Bvh, max_leaf: u32) -> Resul
                         t.scene_index
                     ));
                 }
-                if t.v0 != c[0] || t.e1 != c[1] - c[0] || t.e2 != c[2] - c[0] {
+                if t.v0 != c[0] || t.v1 != c[1] || t.v2 != c[2] {
                     return Err(format!(
                         "triangle slot {ix} does not hold scene triangle {}",
                         t.scene_index

@@ -117,20 +117,24 @@ impl ShadowTargets {
         self.height
     }
 
-    /// `u32` per chunk of 128×128 tiles: tiles (4×4 pixels) whose rays were still being
-    /// traced when the pass's last resume round ended (`COPY_SRC`; see
-    /// [`super::ShadowSettings::resume_rounds`]). All zero means every mask is complete. A
+    /// Two `u32`s per chunk of 128×128 tiles: tiles (4×4 pixels) whose rays were still
+    /// being traced when the pass's last resume round ended (see
+    /// [`super::ShadowSettings::resume_rounds`]), and tiles whose loop the driver ended
+    /// (an [`super::ShadowSettings::iteration_budget`] above its limit) (`COPY_SRC`). All
+    /// zero means every mask is complete. A
     /// host that must not stall copies it into its own mappable buffer and reads it a
     /// frame later; [`ShadowTargets::unfinished_tiles`] does it the blocking way.
     pub fn unfinished(&self) -> &wgpu::Buffer {
         &self.scratch.unfinished
     }
 
-    /// Tiles left unfinished by the last recorded pass, summed over chunks. Waits for the
+    /// Tiles left unfinished by the last recorded pass (both counts, summed over chunks).
+    /// Waits for the
     /// GPU to finish all submitted work (for tests and diagnostics, not every frame).
     pub fn unfinished_tiles(&self, ctx: &GpuContext) -> Result<u64> {
         let chunks = ShadowTracer::chunks(self.width, self.height);
-        let counts: Vec<u32> = read_buffer(ctx, &self.scratch.unfinished, 0..chunks * 4)?;
+        let bytes = chunks * super::super::shadow_tracer::UNFINISHED_WORDS * 4;
+        let counts: Vec<u32> = read_buffer(ctx, &self.scratch.unfinished, 0..bytes)?;
         Ok(counts.iter().map(|&c| u64::from(c)).sum())
     }
 }
