@@ -270,3 +270,41 @@ fn adapter_by_index_and_by_name() {
     .expect_err("there are not 1000 adapters");
     assert!(matches!(err, Error::AdapterNotFound { .. }), "{err:?}");
 }
+
+/// A timer asked to time more passes than it holds fails its read (naming both counts)
+/// instead of returning timings that silently leave passes out; the next frame's read
+/// works again.
+#[test]
+fn more_timed_passes_than_the_timer_holds_is_an_error() {
+    let ctx = context();
+    if !ctx.info.has_timestamps {
+        panic!(
+            "this test needs an adapter with timestamp queries; {} has none",
+            ctx.info.name
+        );
+    }
+    let record = |timer: &mut GpuTimer, passes: usize| {
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        for i in 0..passes {
+            let _pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("empty"),
+                timestamp_writes: timer.pass_writes(&format!("pass {i}")),
+            });
+        }
+        timer.resolve(&mut encoder);
+        ctx.queue.submit([encoder.finish()]);
+    };
+    let mut timer = GpuTimer::new(&ctx, 2);
+    record(&mut timer, 3);
+    let err = timer.read(&ctx).unwrap_err();
+    assert!(
+        matches!(err, penumbra::Error::InvalidValue { .. }) && err.to_string().contains("timed passes = 3"),
+        "{err}"
+    );
+    record(&mut timer, 2);
+    assert_eq!(
+        timer.read(&ctx).unwrap().len(),
+        2,
+        "a read after the failed one works"
+    );
+}
