@@ -31,7 +31,10 @@ pub const MASK_FULL: u32 = 0xffff;
 /// Marks a pixel without geometry.
 pub const MASK_SKY: u32 = 1 << 16;
 /// Iterations a vector runs per dispatch before suspending; below lavapipe's
-/// 65,535-iteration loop limit with room for the kernel's other loops.
+/// 65,535-iteration loop limit with room for the kernel's other loops: the MFT kernel
+/// adds 16 (the samples below the horizon) and at most 64 each to read and to save a
+/// stack of 64 (60,144 in all; its side-plane setup is unrolled, so shrinking loops
+/// nowhere). A loop that ends early all the same is reported ([`crate::Error::LoopCut`]).
 pub const ITERATION_BUDGET: u32 = 60_000;
 
 /// Shadow parameters for a light and image size (one dispatch over the whole image).
