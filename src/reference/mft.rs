@@ -860,3 +860,64 @@ pub fn mft_masks_with_options(
     }
     (masks, counters)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The value of WGSL constant `name` in `kernel` (assembled with `aliases`).
+    fn wgsl_constant(kernel: &str, aliases: &[(&str, &str)], name: &str) -> naga::Literal {
+        let module =
+            naga::front::wgsl::parse_str(&crate::shaders::assemble(kernel, aliases).unwrap()).unwrap();
+        let (_, c) = module
+            .constants
+            .iter()
+            .find(|(_, c)| c.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("{kernel}: no constant {name}"));
+        match module.global_expressions[c.init] {
+            naga::Expression::Literal(l) => l,
+            ref other => panic!("{kernel}: {name} = {other:?}"),
+        }
+    }
+
+    /// The suspended-state layout and the constants the twin shares with
+    /// `shaders/shadow_mft.wgsl` (the kernel's saved words are compared with the twin's
+    /// in tests/gpu_tracers.rs; this names a mismatch on the CPU).
+    #[test]
+    fn the_kernel_has_the_twins_constants() {
+        use naga::Literal::{F32, U32};
+        let u = |v: usize| U32(v as u32);
+        for aliases in [
+            [("shared/vec16", "shared/vec16_subgroup")],
+            [("shared/vec16", "shared/vec16_workgroup")],
+        ] {
+            for (name, value) in [
+                ("STATE_WORDS", u(STATE_WORDS)),
+                ("ST_STATUS", u(ST_STATUS)),
+                ("ST_LANES", u(ST_LANES)),
+                ("ST_STACK_NODE", u(ST_STACK_NODE)),
+                ("ST_STACK_MASK", u(ST_STACK_MASK)),
+                ("ST_CAND", u(ST_CAND)),
+                ("ST_LEAF_MASK", u(ST_LEAF_MASK)),
+                ("ST_PENDING", u(ST_PENDING)),
+                ("ST_SHRUNK", u(ST_SHRUNK)),
+                ("STATUS_SUSPENDED", U32(STATUS_SUSPENDED)),
+                ("STACK_SIZE", u(STACK_SIZE)),
+                ("MASK_FULL", U32(MASK_FULL)),
+                ("MASK_SKY", U32(MASK_SKY)),
+                ("SHRINK_FLAG", U32(SHRINK_FLAG)),
+                ("SHRINK_MARGIN", F32(SHRINK_MARGIN)),
+                ("BOUNDS_PAD", F32(BOUNDS_PAD)),
+                ("WORD_LOOP_CUT", u(crate::counters::WORD_LOOP_CUT)),
+            ] {
+                assert_eq!(
+                    wgsl_constant("shadow_mft", &aliases, name),
+                    value,
+                    "{name} with {aliases:?}"
+                );
+            }
+        }
+        // The host sizes the state buffer by its own copy.
+        assert_eq!(STATE_WORDS as u64, crate::gpu::shadow_tracer::STATE_WORDS);
+    }
+}
