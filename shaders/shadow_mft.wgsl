@@ -1,5 +1,5 @@
 // Multi-frusta soft shadows: one 16-wide vector per 4x4 tile, lane = pixel = frustum of 16 rays.
-// Dispatched by the shadow pass (src/gpu/shadow_pass.rs); CPU twin: src/reference/mft.rs.
+// Dispatched by the shadow pass (src/gpu/shadow_tracer.rs); CPU twin: src/reference/mft.rs.
 
 #import shared/bvh
 #import shared/counters
@@ -27,7 +27,7 @@ const ST_LEAF_MASK: u32 = 153u;
 const ST_PENDING: u32 = 154u;
 const STATUS_SUSPENDED: u32 = 1u;
 
-// How a leaf triangle spends the 16 lanes (LeafMode in src/gpu/shadow_pass.rs).
+// How a leaf triangle spends the 16 lanes (LeafMode in src/gpu/shadow_tracer.rs).
 // false, per lane: lane j culls the triangle against its own frustum and tests
 // its 16 rays itself. true, transposed (the paper's): lane j only culls; then
 // for each frustum f that is left, lane i tests ray i of f and a ballot gives

@@ -1,5 +1,5 @@
 // Copies the visibility (channel a) of a per-pixel value buffer into the host's R32Float texture.
-// Recorded by ShadowPass::record (src/gpu/embed.rs) for the unfiltered and the filtered visibility.
+// Recorded by ShadowPass::record (src/gpu/embed/mod.rs) for the unfiltered and the filtered visibility.
 
 #import shared/surface
 

@@ -1,5 +1,5 @@
 // Visibility per pixel from the shadow masks, as the filter's input: (0, 0, 0, unblocked rays / 16); 1 where no geometry.
-// Recorded by ShadowPass::record (src/gpu/embed.rs) after the shadow pass; CPU twin: reference::shadow::visibility.
+// Recorded by ShadowPass::record (src/gpu/embed/mod.rs) after the shadow pass; CPU twin: reference::shadow::visibility.
 
 #import shared/surface
 

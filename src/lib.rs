@@ -8,7 +8,7 @@
 //!
 //! On the GPU, [`gpu::Renderer`] renders whole frames; an application with its own wgpu
 //! device adds the soft shadows to its frame with [`gpu::ShadowPass`] (see [`gpu::embed`]
-//! and `examples/embed.rs`), and moves objects with [`gpu::GpuScene::set_transforms`].
+//! and `examples/embed/`), and moves objects with [`gpu::GpuScene::set_transforms`].
 //!
 //! ```
 //! use penumbra::{assets, bvh::{Bvh, BvhSettings}, reference, scene::Scene};
@@ -41,3 +41,68 @@ pub mod view;
 pub mod view_checks;
 
 pub use error::{Error, Result};
+
+#[cfg(test)]
+mod tests {
+    /// Every `src/…`, `shaders/…`, `tests/…` and `examples/…` path named in a comment of
+    /// a Rust or WGSL file, or in the README, exists (a file, or a folder when it ends in
+    /// `/`): comments that point newcomers to files must not point at removed ones.
+    #[test]
+    fn paths_named_in_comments_exist() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut files = vec![root.join("README.md")];
+        let mut dirs: Vec<_> = ["src", "shaders", "tests", "examples"]
+            .iter()
+            .map(|d| root.join(d))
+            .collect();
+        while let Some(dir) = dirs.pop() {
+            for entry in std::fs::read_dir(&dir).unwrap() {
+                let path = entry.unwrap().path();
+                if path.is_dir() {
+                    dirs.push(path);
+                } else if path.extension().is_some_and(|e| e == "rs" || e == "wgsl") {
+                    files.push(path);
+                }
+            }
+        }
+        let mut missing = Vec::new();
+        for file in &files {
+            let text = std::fs::read_to_string(file).unwrap();
+            let readme = file.extension().is_some_and(|e| e == "md");
+            for (n, line) in text.lines().enumerate() {
+                if !readme && !line.trim_start().starts_with("//") {
+                    continue;
+                }
+                for start in ["src/", "shaders/", "tests/", "examples/"] {
+                    for (i, _) in line.match_indices(start) {
+                        // A path starts the word: not `../shared/scenes/…` nor `foo_tests/`.
+                        let before = line[..i].chars().next_back();
+                        if before.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == '.' || c == '/') {
+                            continue;
+                        }
+                        let path: String = line[i..]
+                            .chars()
+                            .take_while(|c| c.is_alphanumeric() || "_-./".contains(*c))
+                            .collect();
+                        let path = path.trim_end_matches('.');
+                        let is_file = [".rs", ".wgsl", ".md", ".png", ".json", ".glb"]
+                            .iter()
+                            .any(|e| path.ends_with(e));
+                        if (is_file || path.ends_with('/')) && !root.join(path).exists() {
+                            missing.push(format!(
+                                "{}:{}: {path}",
+                                file.strip_prefix(root).unwrap().display(),
+                                n + 1
+                            ));
+                        }
+                    }
+                }
+            }
+        }
+        assert!(
+            missing.is_empty(),
+            "paths named in comments that do not exist:\n{}",
+            missing.join("\n")
+        );
+    }
+}

@@ -44,7 +44,7 @@
 //! # Ok(()) }
 //! ```
 //!
-//! `examples/embed.rs` is a complete headless application doing exactly this.
+//! `examples/embed/` is a complete headless application doing exactly this.
 
 mod inputs;
 mod targets;
