@@ -67,9 +67,15 @@ fn main() -> penumbra::Result<()> {
     );
     let mut settings = FrameSettings::new(size, size);
     settings.filter = None;
-    let render = |scene: &Scene, view: &View, tracer: Tracer| -> penumbra::Result<Vec<f32>> {
+    // `unmoved`: trace the scene where it lies (GpuScene::with_origin zero), as a host's
+    // far world positions are; otherwise the renderer traces it relative to its centre.
+    let render = |scene: &Scene, view: &View, tracer: Tracer, unmoved: bool| -> penumbra::Result<Vec<f32>> {
         let bvh = Bvh::build(scene, &BvhSettings::default())?;
-        let gpu_scene = GpuScene::new(&ctx, scene, &bvh)?;
+        let gpu_scene = if unmoved {
+            GpuScene::with_origin(&ctx, scene, &bvh, Vec3::ZERO)?
+        } else {
+            GpuScene::new(&ctx, scene, &bvh)?
+        };
         let renderer = Renderer::new(
             &ctx,
             RendererOptions {
@@ -86,20 +92,22 @@ fn main() -> penumbra::Result<()> {
     );
     for tracer in [Tracer::Mft, Tracer::Packet, Tracer::PerRay] {
         let start = Instant::now();
-        let near = render(&scene, &view, tracer)?;
+        let near = render(&scene, &view, tracer, false)?;
         for offset in [1e5f32, 1e6] {
             let t = Vec3::new(offset, 0.0, offset);
             let mut moved = scene.clone();
             moved.translate(t);
             let mut recentred = moved.clone();
             recentred.translate(-t);
-            let far = render(&moved, &view.translated(t), tracer)?;
+            let far = render(&moved, &view.translated(t), tracer, false)?;
+            let unmoved = render(&moved, &view.translated(t), tracer, true)?;
             // The far scene's own (rounded) geometry and view, rendered at the origin.
-            let stored = render(&recentred, &view.translated(t).translated(-t), tracer)?;
+            let stored = render(&recentred, &view.translated(t).translated(-t), tracer, false)?;
             for (name, a, b) in [
                 ("moved", &near, &far),
+                ("moved, unmoved BVH", &near, &unmoved),
                 ("re-centred", &near, &stored),
-                ("moved vs re-centred", &stored, &far),
+                ("unmoved vs re-centred", &stored, &unmoved),
             ] {
                 let n = a.len() as f64;
                 let count = |tol: f32| a.iter().zip(b).filter(|(x, y)| (*x - *y).abs() > tol).count();

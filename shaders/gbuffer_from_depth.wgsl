@@ -24,13 +24,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let z = textureLoad(depth_texture, pixel, 0);
     var texel = background_texel();
     if z != params.background_depth {
-        let world = params.clip_to_world * pixel_clip(params, gid.xy, z);
+        let relative = params.clip_to_eye * pixel_clip(params, gid.xy, z);
         let shading = textureLoad(normal_texture, pixel, 0).xyz;
         var geometric = shading;
         if params.has_geo_normal != 0u {
             geometric = textureLoad(geo_normal_texture, pixel, 0).xyz;
         }
-        texel = surface_texel(params, world.xyz / world.w, shading, geometric);
+        texel = surface_texel(params, params.eye + relative.xyz / relative.w, shading, geometric);
     }
     let p = gid.y * params.width + gid.x;
     gbuffer[p] = texel;

@@ -245,14 +245,16 @@ impl RefineParams {
     }
 }
 
-/// How the embedded shadow pass reads a host's G-buffer textures, 96 bytes
+/// How the embedded shadow pass reads a host's G-buffer textures, 112 bytes
 /// (WGSL `SurfaceParams` in `shaders/shared/surface.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct SurfaceParams {
-    /// Inverse of the host's `projection × view`, columns (bytes 0..64): takes
-    /// `(ndc_x, ndc_y, depth, 1)` back to homogeneous world space.
-    pub clip_to_world: [[f32; 4]; 4],
+    /// Inverse of the host's `projection × view`, then moved by −`eye`, columns (bytes
+    /// 0..64): takes `(ndc_x, ndc_y, depth, 1)` back to homogeneous coordinates relative
+    /// to the eye. Relative, the matrix holds no large translation for a scene far from
+    /// the origin (its f32 rounding would move every point there by several f32 steps).
+    pub clip_to_eye: [[f32; 4]; 4],
     /// Camera position, world space (bytes 64..76).
     pub eye: Vec3,
     /// Distance by which shadow-ray origins leave the surface (bytes 76..80).
@@ -267,6 +269,11 @@ pub struct SurfaceParams {
     /// 1: the geometric-normal binding holds the host's geometric normals; 0: it repeats
     /// the shading normals, which then serve as geometric normals too (bytes 92..96).
     pub has_geo_normal: u32,
+    /// [`crate::gpu::GpuScene::origin`]: the texels' ray origins are relative to it, as
+    /// the scene's BVH is (bytes 96..108).
+    pub origin: Vec3,
+    /// Unused (bytes 108..112).
+    pub pad: u32,
 }
 
 /// An image size for the per-pixel kernels, 16 bytes (WGSL `ImageSize`).
@@ -283,7 +290,7 @@ pub struct ImageSize {
     pub pad1: u32,
 }
 
-const _: () = assert!(size_of::<SurfaceParams>() == 96);
+const _: () = assert!(size_of::<SurfaceParams>() == 112);
 const _: () = assert!(size_of::<ImageSize>() == 16);
 const _: () = assert!(size_of::<ShadeParams>() == 48);
 const _: () = assert!(size_of::<ShadingTriangle>() == 80);
@@ -556,13 +563,15 @@ mod tests {
             "SurfaceParams",
             size_of::<SurfaceParams>(),
             fields!(SurfaceParams {
-                clip_to_world,
+                clip_to_eye,
                 eye,
                 ray_offset,
                 width,
                 height,
                 background_depth,
-                has_geo_normal
+                has_geo_normal,
+                origin,
+                pad
             }),
         );
         check(

@@ -517,3 +517,73 @@ fn a_frame_after_an_unfinished_one_starts_every_tile_afresh() {
         h,
     );
 }
+
+/// The embedded pass on a scene far from the origin: the host's surface points (world
+/// coordinates) are moved into the scene's frame (`GpuScene::origin`), the light too, and
+/// the ray origins clear the surface by 4 f32 steps of the world point, as the host
+/// rounds it: the playground made ten times larger and moved by 1e5 along x and z, given
+/// as world positions, darkens at most 0.1 % of the pixels that are lit in the same pass
+/// over the same (rounded) geometry at the origin (rays that start behind their surface would darken many; a pass that
+/// mixed world and scene coordinates would be wrong everywhere). Given as a depth buffer,
+/// the host's own rasterization at 1e5 (its f32 view matrix) is rounded more coarsely; that
+/// figure is printed: hosts with far scenes should pass positions, or render relative to
+/// the eye.
+#[test]
+fn the_embedded_pass_on_a_far_scene_sees_the_shadows_it_sees_at_the_origin() {
+    let (base, base_view) = embedded("playground");
+    let size = (96, 64);
+    let pass = ShadowPass::new(ctx(), ShadowSettings::default()).unwrap();
+    let t = glam::Vec3::new(1e5, 0.0, 1e5);
+    let (far_scene, far_view) = support::scaled_and_moved(&base, &base_view, 10.0, t);
+    // The far scene's own (rounded) geometry moved back: what f32 stores out there, at the origin.
+    let mut stored = far_scene.clone();
+    stored.translate(-t);
+    let stored_view = far_view.translated(-t);
+    let diagonal = stored.bounds().diagonal();
+    let mut frames = Vec::new();
+    for (offset, scene, view) in [(glam::Vec3::ZERO, stored, stored_view), (t, far_scene, far_view)] {
+        let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
+        let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
+        assert_eq!(gpu_scene.origin == glam::Vec3::ZERO, offset == glam::Vec3::ZERO);
+        for positions in [true, false] {
+            let e = embedded_frame(&pass, &scene, &gpu_scene, &view, size, positions);
+            assert_eq!(e.unfinished, 0);
+            // Texels in the near frame: the far pass's are relative to its scene's origin.
+            let shift = gpu_scene.origin - offset;
+            let points: Vec<GBufferTexel> = e
+                .gbuffer
+                .iter()
+                .map(|g| GBufferTexel {
+                    origin: g.origin + shift,
+                    ..*g
+                })
+                .collect();
+            frames.push((points, e.unfiltered));
+        }
+    }
+    for (input, near, far) in [("position", 0, 2), ("depth", 1, 3)] {
+        let ((ga, a), (gb, b)) = (&frames[near], &frames[far]);
+        // Where the host saw the same surface in both (its raster at 1e5 is rounded too).
+        let same: Vec<usize> = (0..a.len())
+            .filter(|&p| !primary_differs(&ga[p], &gb[p], 5e-4 * diagonal))
+            .collect();
+        let off = same.iter().filter(|&&p| (a[p] - b[p]).abs() > 1.0 / 16.0).count();
+        let darkened = same.iter().filter(|&&p| a[p] == 1.0 && b[p] < 0.5).count();
+        eprintln!(
+            "{input} input at 1e5: the host saw the same surface at {} of {} pixels; there {off} \
+             differ by more than 1/16, {darkened} lit pixels darkened",
+            same.len(),
+            a.len()
+        );
+        if input == "position" {
+            assert!(
+                same.len() * 100 >= a.len() * 95,
+                "{input} input: the host's raster moved"
+            );
+            assert!(
+                darkened * 1000 <= a.len(),
+                "{input} input: {darkened} lit pixels darkened"
+            );
+        }
+    }
+}

@@ -824,10 +824,14 @@ fn shade_matches_cpu_twin() {
     }
 }
 
-/// Unfiltered visibility of `scene` seen through `view` with `tracer`, 256×256.
-fn visibility_image(scene: &Scene, view: &View, tracer: Tracer) -> Vec<f32> {
+/// Unfiltered visibility of `scene` seen through `view` with `tracer`, 256×256, its GPU
+/// buffers relative to `origin` (`None`: the one [`GpuScene::new`] picks).
+fn visibility_image(scene: &Scene, view: &View, tracer: Tracer, origin: Option<Vec3>) -> Vec<f32> {
     let bvh = Bvh::build(scene, &BvhSettings::default()).unwrap();
-    let gpu_scene = GpuScene::new(ctx(), scene, &bvh).unwrap();
+    let gpu_scene = match origin {
+        None => GpuScene::new(ctx(), scene, &bvh).unwrap(),
+        Some(o) => GpuScene::with_origin(ctx(), scene, &bvh, o).unwrap(),
+    };
     let options = RendererOptions {
         tracer,
         ..RendererOptions::default()
@@ -857,7 +861,8 @@ fn differences(a: &[f32], b: &[f32]) -> (usize, usize) {
     (off, darkened)
 }
 
-/// Far from the origin the renderer traces a scene as well as f32 stores it there: the
+/// Traced where it lies, without moving it to the origin (`GpuScene::with_origin` zero,
+/// as a host's far world positions are), a far scene still shows no self-shadowing: the
 /// playground made ten times larger (120 m) and moved by 1e5 and 1e6 along x and z (its
 /// view alike) renders, for every tracer, like the same stored (rounded) geometry moved
 /// back to the origin: at most 0.1 % of the pixels lit there are more than half dark out
@@ -875,8 +880,8 @@ fn far_scenes_trace_as_their_stored_geometry_does_at_the_origin() {
             let (far_scene, far_view) = scaled_and_moved(&base_scene, &base_view, 10.0, t);
             let mut stored = far_scene.clone();
             stored.translate(-t);
-            let at_origin = visibility_image(&stored, &far_view.translated(-t), tracer);
-            let far = visibility_image(&far_scene, &far_view, tracer);
+            let at_origin = visibility_image(&stored, &far_view.translated(-t), tracer, None);
+            let far = visibility_image(&far_scene, &far_view, tracer, Some(Vec3::ZERO));
             let (off, darkened) = differences(&at_origin, &far);
             eprintln!(
                 "{tracer} at {offset:e}: {off} of {} pixels differ by more than 1/16, {darkened} lit pixels darkened",
@@ -893,31 +898,45 @@ fn far_scenes_trace_as_their_stored_geometry_does_at_the_origin() {
     );
 }
 
-/// What the CLI does with far scenes ([`Scene::recentre`] before the BVH is built) keeps
-/// their shadows as at the origin: the playground made 30 times larger (360 m, so that
-/// f32 stores it at 1e6 to 1/10,000 of its size) and moved by 1e5 and 1e6, re-centred,
-/// renders for every tracer a visibility where at most 0.1 % of the pixels differ by more
-/// than 1/16 from the scene built at the origin.
+/// Far scenes keep their shadows as at the origin, whether the renderer moves them there
+/// itself (`GpuScene::new` works relative to a far scene's centre) or the caller did
+/// before building the BVH (`Scene::recentre`, as the CLI does): the playground made 30
+/// times larger (360 m, so that f32 stores it at 1e6 to 1/10,000 of its size) and moved
+/// by 1e5 and 1e6 renders for every tracer a visibility where at most 0.1 % of the
+/// pixels differ by more than 1/16 from the scene built at the origin.
 #[test]
 fn re_centred_far_scenes_keep_their_shadows() {
     let (base_scene, base_view) = embedded("playground");
     let mut failures = Vec::new();
     for tracer in [Tracer::Mft, Tracer::Packet, Tracer::PerRay] {
         let (scene, view) = scaled_and_moved(&base_scene, &base_view, 30.0, Vec3::ZERO);
-        let near = visibility_image(&scene, &view, tracer);
+        let near = visibility_image(&scene, &view, tracer, None);
         for offset in [1e5f32, 1e6] {
-            let (mut far_scene, far_view) =
-                scaled_and_moved(&base_scene, &base_view, 30.0, Vec3::new(offset, 0.0, offset));
-            let shift = far_scene.recentre();
+            let t = Vec3::new(offset, 0.0, offset);
+            let (far_scene, far_view) = scaled_and_moved(&base_scene, &base_view, 30.0, t);
+            let mut moved = far_scene.clone();
+            let shift = moved.recentre();
             assert_ne!(shift, Vec3::ZERO, "a scene at {offset:e} is re-centred");
-            let far = visibility_image(&far_scene, &far_view.translated(-shift), tracer);
-            let (off, _) = differences(&near, &far);
-            eprintln!(
-                "{tracer} at {offset:e}, re-centred: {off} of {} pixels differ by more than 1/16",
-                far.len()
-            );
-            if off * 1000 > far.len() {
-                failures.push(format!("{tracer} at {offset:e}: {off} pixels off"));
+            for (how, far) in [
+                (
+                    "by the renderer",
+                    visibility_image(&far_scene, &far_view, tracer, None),
+                ),
+                (
+                    "by the caller",
+                    visibility_image(&moved, &far_view.translated(-shift), tracer, None),
+                ),
+            ] {
+                let (off, _) = differences(&near, &far);
+                eprintln!(
+                    "{tracer} at {offset:e}, re-centred {how}: {off} of {} pixels differ by more than 1/16",
+                    far.len()
+                );
+                if off * 1000 > far.len() {
+                    failures.push(format!(
+                        "{tracer} at {offset:e}, re-centred {how}: {off} pixels off"
+                    ));
+                }
             }
         }
     }

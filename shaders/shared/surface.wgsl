@@ -3,15 +3,17 @@
 
 #import shared/frame
 
-// How the host's G-buffer textures map to world space, 96 bytes.
+// How the host's G-buffer textures map to world space, 112 bytes.
 struct SurfaceParams {
-    clip_to_world: mat4x4<f32>,  // bytes 0..64: inverse of the host's projection × view
+    clip_to_eye: mat4x4<f32>,    // bytes 0..64: inverse of the host's projection × view, moved by -eye
     eye: vec3<f32>,              // bytes 64..76: camera position, world space
     ray_offset: f32,             // bytes 76..80: shadow-ray origin offset along the normal
     width: u32,                  // bytes 80..84
     height: u32,                 // bytes 84..88
     background_depth: f32,       // bytes 88..92: depth texels equal to this see no geometry
     has_geo_normal: u32,         // bytes 92..96: 1 = the geometric-normal texture is the host's own
+    origin: vec3<f32>,           // bytes 96..108: GpuScene::origin, which ray origins are relative to
+    pad: u32,                    // bytes 108..112
 }
 
 // An image size for the per-pixel kernels, 16 bytes.
@@ -56,7 +58,8 @@ fn surface_texel(params: SurfaceParams, point: vec3<f32>, shading: vec3<f32>, ge
         normal = -normal;
     }
     var texel: GBufferTexel;
-    texel.origin = shadow_ray_origin(point, geo, params.ray_offset);
+    // Offset at the world point (the host's rounding is the world's), then moved.
+    texel.origin = shadow_ray_origin(point, geo, params.ray_offset) - params.origin;
     texel.depth = length(dir);
     texel.normal = normal;
     texel.triangle = UNKNOWN_TRIANGLE;

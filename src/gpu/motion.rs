@@ -120,6 +120,7 @@ impl GpuScene {
             bvh.nodes.len().max(2 * n_tris.saturating_sub(1) + 1),
             BvhNode::default(),
         );
+        let nodes = super::scene_buffers::nodes_from(&nodes, gpu.origin);
         gpu.nodes = storage_buffer(ctx, "BVH nodes", &nodes, wgpu::BufferUsages::COPY_DST)?;
 
         let inverses: Vec<Option<Mat4>> = scene
@@ -255,14 +256,17 @@ impl GpuScene {
             write(
                 &self.nodes,
                 r.start * size_of::<BvhNode>(),
-                bytemuck::cast_slice(&bvh.nodes[r]),
+                bytemuck::cast_slice(&super::scene_buffers::nodes_from(&bvh.nodes[r], self.origin)),
             );
         }
         for r in tri_ranges {
             write(
                 &self.triangles,
-                r.start * 48,
-                bytemuck::cast_slice(&bvh.triangles[r.clone()]),
+                r.start * size_of::<crate::layout::BvhTriangle>(),
+                bytemuck::cast_slice(&super::scene_buffers::triangles_from(
+                    &bvh.triangles[r.clone()],
+                    self.origin,
+                )),
             );
             let shading: Vec<ShadingTriangle> = bvh.triangles[r.clone()]
                 .iter()

@@ -81,7 +81,8 @@ pub struct Frame {
     pub refined: Vec<bool>,
     /// Diffuse BRDF, albedo / π (rgb; a unused); 0 for sky pixels.
     pub brdf: Vec<[f32; 4]>,
-    /// The G-buffer, when [`FrameSettings::keep_gbuffer`] asked for it.
+    /// The G-buffer, when [`FrameSettings::keep_gbuffer`] asked for it; positions are
+    /// relative to [`GpuScene::origin`] (the world's for a scene near the origin).
     pub gbuffer: Option<Vec<GBufferTexel>>,
     /// GPU milliseconds per pass: `primary`, `shadow` (all its dispatches), `shade`, `filter`.
     pub timings: Vec<(String, f64)>,
@@ -322,6 +323,14 @@ impl Renderer {
         }
         view.validate()
             .map_err(|message| Error::invalid("Renderer::render view", message))?;
+        // The kernels work relative to the scene's origin (GpuScene::origin).
+        let moved;
+        let view = if scene.origin == Vec3::ZERO {
+            view
+        } else {
+            moved = view.translated(-scene.origin);
+            &moved
+        };
         if settings.refine && settings.filter.is_none() {
             return Err(Error::invalid(
                 "FrameSettings::refine",

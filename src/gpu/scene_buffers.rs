@@ -1,9 +1,14 @@
 //! The scene on the GPU: BVH nodes, triangles, shading data and materials
 //! (moving objects: `motion.rs`).
 
+use std::borrow::Cow;
+
+use glam::Vec3;
+
 use super::{GpuContext, storage_buffer};
 use crate::bvh::Bvh;
 use crate::frame::ShadingData;
+use crate::layout::{BvhNode, BvhTriangle};
 use crate::reference::mft::STACK_SIZE;
 use crate::scene::Scene;
 use crate::{Error, Result};
@@ -25,6 +30,14 @@ pub struct GpuScene {
     pub texels: wgpu::Buffer,
     /// Length of the scene's bounding-box diagonal (for relative offsets).
     pub diagonal: f32,
+    /// The world point the BVH buffers are relative to: the centre of a scene that lies
+    /// farther from the origin than its diagonal ([`crate::scene::Bounds::far_centre`]),
+    /// else zero (then the buffers hold the world coordinates as they are). Far out, f32
+    /// rounds hit points and ray origins by centimetres (1e5 m) to decimetres (1e6 m);
+    /// relative to the scene's centre the kernels keep a scene built at the origin's
+    /// precision. The renderer and the embedded pass move the camera, the light and the
+    /// host's surface points by it; G-buffer texels read back are relative to it.
+    pub origin: Vec3,
     /// The CPU copy that moving objects need ([`GpuScene::with_motion`]).
     pub(super) motion: Option<Box<super::motion::Motion>>,
 }
@@ -56,20 +69,69 @@ pub fn validate_for_gpu(bvh: &Bvh) -> Result<()> {
     Ok(())
 }
 
+/// `nodes` relative to `origin` (the same slice when it is zero). Rounding is monotonic,
+/// so a box still holds its triangles' moved corners.
+pub(super) fn nodes_from(nodes: &[BvhNode], origin: Vec3) -> Cow<'_, [BvhNode]> {
+    if origin == Vec3::ZERO {
+        return Cow::Borrowed(nodes);
+    }
+    Cow::Owned(
+        nodes
+            .iter()
+            .map(|n| BvhNode {
+                bmin: n.bmin - origin,
+                bmax: n.bmax - origin,
+                ..*n
+            })
+            .collect(),
+    )
+}
+
+/// `triangles` relative to `origin` (the same slice when it is zero).
+pub(super) fn triangles_from(triangles: &[BvhTriangle], origin: Vec3) -> Cow<'_, [BvhTriangle]> {
+    if origin == Vec3::ZERO {
+        return Cow::Borrowed(triangles);
+    }
+    Cow::Owned(
+        triangles
+            .iter()
+            .map(|t| BvhTriangle {
+                v0: t.v0 - origin,
+                v1: t.v1 - origin,
+                v2: t.v2 - origin,
+                ..*t
+            })
+            .collect(),
+    )
+}
+
 impl GpuScene {
-    /// Uploads a scene and its BVH (checked with [`validate_for_gpu`]).
+    /// Uploads a scene and its BVH (checked with [`validate_for_gpu`]), relative to the
+    /// scene's [`GpuScene::origin`].
     pub fn new(ctx: &GpuContext, scene: &Scene, bvh: &Bvh) -> Result<GpuScene> {
+        GpuScene::with_origin(ctx, scene, bvh, scene.bounds().far_centre())
+    }
+
+    /// [`GpuScene::new`] relative to a given `origin` (`Vec3::ZERO`: the world
+    /// coordinates as they are, which tests use to trace a far scene unmoved).
+    pub fn with_origin(ctx: &GpuContext, scene: &Scene, bvh: &Bvh, origin: Vec3) -> Result<GpuScene> {
         validate_for_gpu(bvh)?;
         let usage = wgpu::BufferUsages::COPY_DST;
         let shading = ShadingData::new(scene, bvh)?;
         Ok(GpuScene {
-            nodes: storage_buffer(ctx, "BVH nodes", &bvh.nodes, usage)?,
-            triangles: storage_buffer(ctx, "BVH triangles", &bvh.triangles, usage)?,
+            nodes: storage_buffer(ctx, "BVH nodes", &nodes_from(&bvh.nodes, origin), usage)?,
+            triangles: storage_buffer(
+                ctx,
+                "BVH triangles",
+                &triangles_from(&bvh.triangles, origin),
+                usage,
+            )?,
             shading: storage_buffer(ctx, "shading triangles", &shading.triangles, usage)?,
             materials: storage_buffer(ctx, "materials", &shading.materials, usage)?,
             textures: storage_buffer(ctx, "textures", &shading.textures, usage)?,
             texels: storage_buffer(ctx, "texels", &shading.texels, usage)?,
             diagonal: scene.bounds().diagonal(),
+            origin,
             motion: None,
         })
     }

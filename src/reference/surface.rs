@@ -15,10 +15,11 @@ pub fn pixel_clip(params: &SurfaceParams, x: u32, y: u32, z: f32) -> Vec4 {
     Vec4::new(sx, sy, z, 1.0)
 }
 
-/// World position of pixel `(x, y)` whose depth texel is `z`.
+/// World position of pixel `(x, y)` whose depth texel is `z`: the eye plus the
+/// unprojected point relative to it (the kernel's arithmetic).
 pub fn unproject(params: &SurfaceParams, x: u32, y: u32, z: f32) -> Vec3 {
-    let world = Mat4::from_cols_array_2d(&params.clip_to_world) * pixel_clip(params, x, y, z);
-    world.truncate() / world.w
+    let relative = Mat4::from_cols_array_2d(&params.clip_to_eye) * pixel_clip(params, x, y, z);
+    params.eye + relative.truncate() / relative.w
 }
 
 /// `v` normalized, or `fallback` when `v` has no (finite) length.
@@ -33,7 +34,8 @@ fn unit_or(v: Vec3, fallback: Vec3) -> Vec3 {
 
 /// The texel of surface point `point` with the host's `shading` and `geometric`
 /// normals (any length): both flipped to the camera's side, the shadow-ray origin
-/// moved off the surface along the geometric normal ([`crate::frame::shadow_ray_origin`]), `depth` the eye distance. A zero
+/// moved off the surface along the geometric normal ([`crate::frame::shadow_ray_origin`])
+/// and made relative to `params.origin`, `depth` the eye distance. A zero
 /// geometric normal falls back to the shading normal, a zero shading normal to the
 /// direction towards the eye. Albedo is left 0: the host shades.
 pub fn surface_texel(params: &SurfaceParams, point: Vec3, shading: Vec3, geometric: Vec3) -> GBufferTexel {
@@ -48,7 +50,7 @@ pub fn surface_texel(params: &SurfaceParams, point: Vec3, shading: Vec3, geometr
         normal = -normal;
     }
     GBufferTexel {
-        origin: crate::frame::shadow_ray_origin(point, geo, params.ray_offset),
+        origin: crate::frame::shadow_ray_origin(point, geo, params.ray_offset) - params.origin,
         depth: dir.length(),
         normal,
         triangle: GBufferTexel::UNKNOWN_TRIANGLE,
@@ -73,20 +75,22 @@ mod tests {
         let view = glam::camera::rh::view::look_at_mat4(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y);
         let proj = glam::camera::rh::proj::directx::perspective(1.0, 2.0, 0.1, 100.0);
         SurfaceParams {
-            clip_to_world: (proj * view).inverse().to_cols_array_2d(),
+            clip_to_eye: (Mat4::from_translation(-Vec3::new(0.0, 0.0, 5.0)) * (proj * view).inverse())
+                .to_cols_array_2d(),
             eye: Vec3::new(0.0, 0.0, 5.0),
             ray_offset: 0.01,
             width: 8,
             height: 4,
             background_depth: 1.0,
             has_geo_normal: 1,
+            ..Default::default()
         }
     }
 
     #[test]
     fn unprojecting_a_projected_point_gives_it_back() {
         let p = params();
-        let view_proj = Mat4::from_cols_array_2d(&p.clip_to_world).inverse();
+        let view_proj = (Mat4::from_translation(p.eye) * Mat4::from_cols_array_2d(&p.clip_to_eye)).inverse();
         // The centre of pixel (5, 1) on the plane z = 0.
         let world = unproject(&p, 5, 1, 0.5);
         let ray = (world - p.eye).normalize();

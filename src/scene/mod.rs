@@ -189,6 +189,18 @@ impl Bounds {
         self.max = self.max.max(p);
     }
 
+    /// The centre of bounds that lie farther from the origin than their own diagonal
+    /// (rounded to f32), else zero: the offset [`Scene::recentre`] and
+    /// [`crate::gpu::GpuScene`] subtract so that f32 keeps its precision.
+    pub fn far_centre(&self) -> Vec3 {
+        let centre = (self.min + self.max) * 0.5;
+        if !centre.is_finite() || centre.length() <= self.diagonal() {
+            Vec3::ZERO
+        } else {
+            centre
+        }
+    }
+
     /// Length of the diagonal; the scene's size for relative tolerances.
     pub fn diagonal(&self) -> f32 {
         (self.max - self.min).length()
@@ -268,12 +280,10 @@ impl Scene {
     /// scene near enough, which is left as it was, bit for bit. Move the view alike:
     /// `view.translated(-offset)`. The CLI does this for every scene it loads.
     pub fn recentre(&mut self) -> Vec3 {
-        let b = self.bounds();
-        let centre = (b.min + b.max) * 0.5;
-        if !centre.is_finite() || centre.length() <= b.diagonal() {
-            return Vec3::ZERO;
+        let centre = self.bounds().far_centre();
+        if centre != Vec3::ZERO {
+            self.translate(-centre);
         }
-        self.translate(-centre);
         centre
     }
 

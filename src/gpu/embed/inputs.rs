@@ -67,22 +67,26 @@ pub struct ShadowInputs<'a> {
 }
 
 impl ShadowInputs<'_> {
-    /// The eye position and the clip-to-world matrix (identity for [`SurfaceInput::Position`]).
+    /// The eye position and the clip-to-eye matrix ([`SurfaceParams::clip_to_eye`](crate::layout::SurfaceParams::clip_to_eye); identity for [`SurfaceInput::Position`]).
     pub(super) fn camera(&self) -> Result<(Vec3, Mat4)> {
         match self.surface {
             SurfaceInput::Position { eye, .. } => Ok((eye, Mat4::IDENTITY)),
             SurfaceInput::Depth { view, projection, .. } => {
                 // In f64, rounded once: the w row of (P·V)⁻¹ nearly cancels against depths
                 // close to 1, so the matrix should add no rounding of its own.
-                let clip_to_world = (projection.as_dmat4() * view.as_dmat4()).inverse().as_mat4();
                 let view_inverse = view.inverse();
-                if !view_inverse.is_finite() || !clip_to_world.is_finite() {
+                let eye = view_inverse.w_axis.truncate();
+                // Relative to the eye, so that no large translation is rounded into it.
+                let clip_to_eye = (glam::DMat4::from_translation(-eye.as_dvec3())
+                    * (projection.as_dmat4() * view.as_dmat4()).inverse())
+                .as_mat4();
+                if !view_inverse.is_finite() || !clip_to_eye.is_finite() {
                     return Err(Error::invalid(
                         "ShadowInputs::surface",
                         "the view or projection matrix is not invertible",
                     ));
                 }
-                Ok((view_inverse.w_axis.truncate(), clip_to_world))
+                Ok((eye, clip_to_eye))
             }
         }
     }

@@ -245,7 +245,7 @@ impl ShadowPass {
     ) -> Result<()> {
         let (w, h) = (targets.width(), targets.height());
         inputs.check(w, h)?;
-        let (eye, clip_to_world) = inputs.camera()?;
+        let (eye, clip_to_eye) = inputs.camera()?;
         let groups = (w.div_ceil(PIXEL_GROUP), h.div_ceil(PIXEL_GROUP));
         let device = &self.device;
 
@@ -272,13 +272,15 @@ impl ShadowPass {
             .map(|t| t.create_view(&Default::default()))
             .unwrap_or_else(|| normal_view.clone());
         let params = SurfaceParams {
-            clip_to_world: clip_to_world.to_cols_array_2d(),
+            clip_to_eye: clip_to_eye.to_cols_array_2d(),
             eye,
             ray_offset: scene.diagonal * RAY_OFFSET_FRACTION,
             width: w,
             height: h,
             background_depth,
             has_geo_normal: u32::from(inputs.geometric_normal.is_some()),
+            origin: scene.origin,
+            pad: 0,
         };
         let params_buf = uniform_buffer_on(device, "surface params", &params);
         let bind = kernel.bind_resources(
@@ -295,8 +297,13 @@ impl ShadowPass {
         );
         kernel.record(encoder, "embed/gbuffer", &bind, None, groups);
 
-        let light_points = light_points_buffer(device, inputs.light);
-        let mut shadow = shadow_params(inputs.light, w, h);
+        // Relative to the scene's origin, as its BVH and the texels are.
+        let light = crate::view::QuadLight {
+            corner: inputs.light.corner - scene.origin,
+            ..*inputs.light
+        };
+        let light_points = light_points_buffer(device, &light);
+        let mut shadow = shadow_params(&light, w, h);
         shadow.iteration_budget = self.settings.iteration_budget.max(1);
         self.tracer.record(
             device,
