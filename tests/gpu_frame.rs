@@ -23,7 +23,9 @@ use penumbra::scene::Scene;
 use penumbra::view::{Camera, QuadLight, View};
 use penumbra::{assets, sampling};
 use support::gpu::{assert_same_rays, ctx, embedded, variants};
-use support::{Rng, compare_masks, edge_tolerance, own_triangle, scaled_and_moved, scene_from_triangles};
+use support::{
+    Rng, compare_masks, edge_tolerance, near_miss_stack, own_triangle, scaled_and_moved, scene_from_triangles,
+};
 
 /// lavapipe (Mesa 22.3) ends every loop of an invocation after this many
 /// iterations, counted across all its loops. Measured here: a loop nested in
@@ -614,17 +616,7 @@ fn loop_limit_tile_still_matches_oracle() {
 /// ray) before it hits the ground: the primary kernel visits every node.
 fn near_miss_stack_scene(n: usize) -> (Scene, View) {
     let mut tris: Vec<([Vec3; 3], u32)> = horizontal_square(0.0, 2.0, 0).to_vec();
-    for i in 0..n {
-        let y = 1.0 + 8.0 * (i as f32 + 0.5) / n as f32;
-        tris.push((
-            [
-                Vec3::new(-1.0, y, 1.0),
-                Vec3::new(1.0, y, 1.0),
-                Vec3::new(1.0, y, -0.9),
-            ],
-            1,
-        ));
-    }
+    tris.extend(near_miss_stack(n));
     let scene = scene_from_triangles(&tris, &[[0.8, 0.8, 0.8], [0.3, 0.3, 0.3]]);
     // A light low to the side, so that shadow rays pass under the stack.
     let view = View {

@@ -15,6 +15,7 @@ use penumbra::reference::counters::Counters;
 use penumbra::reference::mft::{TileOptions, mft_masks, mft_masks_with_options};
 use penumbra::reference::packet::packet_masks;
 use penumbra::reference::shadow::{ITERATION_BUDGET, MASK_FULL, reference_counts, shadow_params};
+use penumbra::scene::Scene;
 use penumbra::view::{QuadLight, View};
 use penumbra::{assets, sampling};
 use support::gpu::{
@@ -151,20 +152,27 @@ fn run_counted(
     (masks, stats.counters)
 }
 
+/// A built-in scene, its view, BVH and GPU copy, and the G-buffer the renderer traces
+/// for a `w`×`h` image of it.
+fn traced_gbuffer(name: &str, w: u32, h: u32) -> (Scene, View, Bvh, GpuScene, Vec<GBufferTexel>) {
+    let (scene, view) = embedded(name);
+    let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
+    let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
+    let mut settings = FrameSettings::new(w, h);
+    settings.keep_gbuffer = true;
+    let frame = Renderer::new(ctx(), None)
+        .unwrap()
+        .render(ctx(), &gpu_scene, &view, &settings)
+        .unwrap();
+    let texels = frame.gbuffer.unwrap();
+    (scene, view, bvh, gpu_scene, texels)
+}
+
 #[test]
 fn counters_equal_the_cpu_twins() {
     for s in assets::EMBEDDED_SCENES {
-        let (scene, view) = embedded(s.name);
-        let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
-        let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
         let (w, h) = (48, 36);
-        let mut settings = FrameSettings::new(w, h);
-        settings.keep_gbuffer = true;
-        let frame = Renderer::new(ctx(), None)
-            .unwrap()
-            .render(ctx(), &gpu_scene, &view, &settings)
-            .unwrap();
-        let texels = frame.gbuffer.unwrap();
+        let (scene, view, bvh, gpu_scene, texels) = traced_gbuffer(s.name, w, h);
         let params = shadow_params(&view.light, w, h);
         let points = sampling::light_points(&view.light);
         let (mft_plain, _) = mft_masks(&bvh, &texels, &points, &params, ITERATION_BUDGET);
@@ -227,22 +235,28 @@ fn counters_equal_the_cpu_twins() {
     }
 }
 
-/// A 4×4 tile of shade points on the floor at y = 0 under a light at y = 3.
-fn floor_tile() -> (Vec<GBufferTexel>, View) {
+/// A 4×4 tile of ground points `spacing` apart around the origin at height `y`, facing
+/// up, under a square light `2·half` wide at height `light_y`, facing down.
+fn tile_under_a_light(spacing: f32, y: f32, half: f32, light_y: f32) -> (Vec<GBufferTexel>, View) {
     let texels = (0..16)
         .map(|i| GBufferTexel {
-            origin: Vec3::new((i % 4) as f32 * 0.2 - 0.3, 0.0, (i / 4) as f32 * 0.2 - 0.3),
+            origin: Vec3::new(
+                ((i % 4) as f32 - 1.5) * spacing,
+                y,
+                ((i / 4) as f32 - 1.5) * spacing,
+            ),
             depth: 1.0,
             normal: Vec3::Y,
             geo_normal: Vec3::Y,
+            triangle: GBufferTexel::UNKNOWN_TRIANGLE,
             ..GBufferTexel::default()
         })
         .collect();
     let light = QuadLight {
-        corner: Vec3::new(-0.5, 3.0, -0.5),
+        corner: Vec3::new(-half, light_y, -half),
         // Facing down: cross(edge_u, edge_v) = -y.
-        edge_u: Vec3::new(1.0, 0.0, 0.0),
-        edge_v: Vec3::new(0.0, 0.0, 1.0),
+        edge_u: Vec3::new(2.0 * half, 0.0, 0.0),
+        edge_v: Vec3::new(0.0, 0.0, 2.0 * half),
         color: Vec3::ONE,
         intensity: 1.0,
     };
@@ -251,6 +265,11 @@ fn floor_tile() -> (Vec<GBufferTexel>, View) {
         ..embedded("playground").1
     };
     (texels, view)
+}
+
+/// A 4×4 tile of shade points on the floor at y = 0 under a light at y = 3.
+fn floor_tile() -> (Vec<GBufferTexel>, View) {
+    tile_under_a_light(0.2, 0.0, 0.5, 3.0)
 }
 
 #[test]
@@ -346,35 +365,22 @@ fn every_tracer() -> Vec<(Tracer, LeafMode, VectorVariant)> {
     out
 }
 
-/// A 4×4 tile of ground points within 0.0075 of the origin under a 0.02-wide light at
-/// y = 10, facing down: every shadow ray stays within 0.02 of the y axis.
+/// The shadow pass of one tracer, leaf mode and vector variant, otherwise by default.
+fn shadow_tracer(tracer: Tracer, leaf_mode: LeafMode, variant: VectorVariant) -> ShadowTracer {
+    let options = TracerOptions {
+        tracer,
+        variant: Some(variant),
+        leaf_mode,
+        ..TracerOptions::default()
+    };
+    ShadowTracer::with_options(ctx(), &options).unwrap()
+}
+
+/// A 4×4 tile of ground points within 0.0075 of the origin (the ray offset above it)
+/// under a 0.02-wide light at y = 10, facing down: every shadow ray stays within 0.02 of
+/// the y axis.
 fn column_tile() -> (Vec<GBufferTexel>, View) {
-    let texels = (0..16)
-        .map(|i| GBufferTexel {
-            origin: Vec3::new(
-                (i % 4) as f32 * 0.005 - 0.0075,
-                1e-4,
-                (i / 4) as f32 * 0.005 - 0.0075,
-            ),
-            depth: 1.0,
-            normal: Vec3::Y,
-            geo_normal: Vec3::Y,
-            triangle: u32::MAX - 1,
-            ..GBufferTexel::default()
-        })
-        .collect();
-    let light = QuadLight {
-        corner: Vec3::new(-0.01, 10.0, -0.01),
-        edge_u: Vec3::new(0.02, 0.0, 0.0),
-        edge_v: Vec3::new(0.0, 0.0, 0.02),
-        color: Vec3::ONE,
-        intensity: 1.0,
-    };
-    let view = View {
-        light,
-        ..embedded("playground").1
-    };
-    (texels, view)
+    tile_under_a_light(0.005, 1e-4, 0.01, 10.0)
 }
 
 /// A tile whose rays need more loop passes than lavapipe allows (a column of 200,000
@@ -401,16 +407,7 @@ fn a_loop_the_driver_ends_is_an_error_never_wrong_masks() {
             "blocker at {blocker_y}: the blocker must block every ray: {oracle:x?}"
         );
         for (tracer, leaf_mode, variant) in every_tracer() {
-            let pass = ShadowTracer::with_options(
-                ctx(),
-                &TracerOptions {
-                    tracer,
-                    variant: Some(variant),
-                    leaf_mode,
-                    ..TracerOptions::default()
-                },
-            )
-            .unwrap();
+            let pass = shadow_tracer(tracer, leaf_mode, variant);
             let label = format!("blocker at {blocker_y}, {tracer} {leaf_mode} {variant}");
             match try_trace_masks(&pass, &gpu_scene, &texels, &view, &params) {
                 Err(e) => {
@@ -503,17 +500,8 @@ fn a_suspended_tile_saves_the_state_the_twin_saves() {
     use penumbra::reference::mft::{
         Frustum, STATE_WORDS, STATUS_SUSPENDED, TileOptions, TileRun, dispatch_tile,
     };
-    let (scene, view) = embedded("lattice");
-    let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
-    let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
     let (w, h) = (24, 20);
-    let mut settings = FrameSettings::new(w, h);
-    settings.keep_gbuffer = true;
-    let frame = Renderer::new(ctx(), None)
-        .unwrap()
-        .render(ctx(), &gpu_scene, &view, &settings)
-        .unwrap();
-    let texels = frame.gbuffer.unwrap();
+    let (_, view, bvh, gpu_scene, texels) = traced_gbuffer("lattice", w, h);
     let points = sampling::light_points(&view.light);
     let light: Vec<[f32; 4]> = points.iter().map(|p| p.extend(0.0).to_array()).collect();
     let usage = wgpu::BufferUsages::empty();
@@ -613,16 +601,7 @@ fn no_ray_slips_through_a_shared_edge_on_the_gpu() {
     let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
     let params = shadow_params(&view.light, w, h);
     for (tracer, leaf_mode, variant) in every_tracer() {
-        let pass = ShadowTracer::with_options(
-            ctx(),
-            &TracerOptions {
-                tracer,
-                variant: Some(variant),
-                leaf_mode,
-                ..TracerOptions::default()
-            },
-        )
-        .unwrap();
+        let pass = shadow_tracer(tracer, leaf_mode, variant);
         let (masks, _) = trace_masks(&pass, &gpu_scene, &texels, &view, &params);
         let through = masks.iter().filter(|&&m| m & 1 == 0).count();
         eprintln!(

@@ -19,18 +19,54 @@ use penumbra::view::{Camera, QuadLight, View};
 use penumbra::{assets, sampling, scene::Scene};
 use support::{assert_masks_match_oracle, closed_room, rays_through_a_shared_edge, scene_from_triangles};
 
-#[test]
-fn mft_twin_matches_per_ray_oracle_on_generated_scenes() {
-    for s in assets::EMBEDDED_SCENES {
+/// A generated scene, its view and BVH, the CPU twin's G-buffer of a `w`×`h` image, the
+/// shadow parameters and the light points.
+struct Case {
+    scene: Scene,
+    view: View,
+    bvh: Bvh,
+    gbuffer: Vec<penumbra::layout::GBufferTexel>,
+    params: penumbra::layout::ShadowParams,
+    points: Vec<Vec3>,
+}
+
+impl Case {
+    fn new(s: &assets::EmbeddedScene, w: u32, h: u32) -> Case {
         let scene = Scene::from_bytes(s.glb, Path::new(s.file_name)).unwrap();
         let view = s.view();
         let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
-        let diag = scene.bounds().diagonal();
-        let (w, h) = (90, 70); // not a multiple of 4 on purpose: edge tiles are partial
-        let cam = camera_params(&view.camera, w, h, diag * RAY_OFFSET_FRACTION);
+        let cam = camera_params(
+            &view.camera,
+            w,
+            h,
+            scene.bounds().diagonal() * RAY_OFFSET_FRACTION,
+        );
         let gbuffer = primary_gbuffer(&bvh, &ShadingData::new(&scene, &bvh).unwrap(), &cam);
         let params = shadow_params(&view.light, w, h);
         let points = sampling::light_points(&view.light);
+        Case {
+            scene,
+            view,
+            bvh,
+            gbuffer,
+            params,
+            points,
+        }
+    }
+}
+
+#[test]
+fn mft_twin_matches_per_ray_oracle_on_generated_scenes() {
+    for s in assets::EMBEDDED_SCENES {
+        let (w, h) = (90, 70); // not a multiple of 4 on purpose: edge tiles are partial
+        let Case {
+            scene,
+            view,
+            bvh,
+            gbuffer,
+            params,
+            points,
+        } = Case::new(s, w, h);
         let (mft, counters) = mft_masks(&bvh, &gbuffer, &points, &params, ITERATION_BUDGET);
         let (differing, total, oracle) =
             assert_masks_match_oracle(s.name, &scene, &bvh, &view, &gbuffer, &mft, w, h);
@@ -57,19 +93,13 @@ fn mft_twin_matches_per_ray_oracle_on_generated_scenes() {
 #[test]
 fn suspending_and_resuming_keeps_the_masks_and_the_work() {
     for s in assets::EMBEDDED_SCENES {
-        let scene = Scene::from_bytes(s.glb, Path::new(s.file_name)).unwrap();
-        let view = s.view();
-        let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
-        let (w, h) = (32, 32);
-        let cam = camera_params(
-            &view.camera,
-            w,
-            h,
-            scene.bounds().diagonal() * RAY_OFFSET_FRACTION,
-        );
-        let gbuffer = primary_gbuffer(&bvh, &ShadingData::new(&scene, &bvh).unwrap(), &cam);
-        let params = shadow_params(&view.light, w, h);
-        let points = sampling::light_points(&view.light);
+        let Case {
+            bvh,
+            gbuffer,
+            params,
+            points,
+            ..
+        } = Case::new(s, 32, 32);
         for (shrink, transposed) in [(false, false), (true, false), (true, true)] {
             let run = |budget| {
                 let options = TileOptions {
@@ -100,19 +130,13 @@ fn suspending_and_resuming_keeps_the_masks_and_the_work() {
 #[test]
 fn frustum_shrinking_keeps_the_masks_and_saves_triangle_tests() {
     for s in assets::EMBEDDED_SCENES {
-        let scene = Scene::from_bytes(s.glb, Path::new(s.file_name)).unwrap();
-        let view = s.view();
-        let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
-        let (w, h) = (64, 48);
-        let cam = camera_params(
-            &view.camera,
-            w,
-            h,
-            scene.bounds().diagonal() * RAY_OFFSET_FRACTION,
-        );
-        let gbuffer = primary_gbuffer(&bvh, &ShadingData::new(&scene, &bvh).unwrap(), &cam);
-        let params = shadow_params(&view.light, w, h);
-        let points = sampling::light_points(&view.light);
+        let Case {
+            bvh,
+            gbuffer,
+            params,
+            points,
+            ..
+        } = Case::new(s, 64, 48);
         let (plain, c0) = mft_masks_with(&bvh, &gbuffer, &points, &params, ITERATION_BUDGET, false);
         let (shrunk, c1) = mft_masks_with(&bvh, &gbuffer, &points, &params, ITERATION_BUDGET, true);
         println!(

@@ -451,18 +451,27 @@ pub fn near_miss_column(n: usize, blocker_y: f32) -> Vec<([Vec3; 3], u32)> {
     };
     let mut tris: Vec<([Vec3; 3], u32)> = square(0.0, 2.0, 0).to_vec();
     tris.extend(square(blocker_y, 0.05, 1));
-    for i in 0..n {
-        let y = 1.0 + 8.0 * (i as f32 + 0.5) / n as f32;
-        tris.push((
-            [
-                Vec3::new(-1.0, y, 1.0),
-                Vec3::new(1.0, y, 1.0),
-                Vec3::new(1.0, y, -0.9),
-            ],
-            1,
-        ));
-    }
+    tris.extend(near_miss_stack(n));
     tris
+}
+
+/// `n` horizontal triangles (material 1) stacked over y ∈ [1, 9] whose boxes all hold
+/// the vertical line x = z = 0 while each one's long edge passes 0.036 beside it: a ray
+/// near that line enters every box and touches no triangle.
+pub fn near_miss_stack(n: usize) -> Vec<([Vec3; 3], u32)> {
+    (0..n)
+        .map(|i| {
+            let y = 1.0 + 8.0 * (i as f32 + 0.5) / n as f32;
+            (
+                [
+                    Vec3::new(-1.0, y, 1.0),
+                    Vec3::new(1.0, y, 1.0),
+                    Vec3::new(1.0, y, -0.9),
+                ],
+                1,
+            )
+        })
+        .collect()
 }
 
 /// `scene` and `view` scaled by `scale` about the origin, then moved by `offset`
