@@ -24,6 +24,7 @@
 
 pub mod assets;
 pub mod bvh;
+pub mod contract;
 pub mod counters;
 mod error;
 pub mod error_regions;

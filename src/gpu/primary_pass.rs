@@ -16,9 +16,10 @@
 
 use super::kernel::{Binding, Checks, Kernel, uniform_buffer};
 use super::{GpuContext, GpuScene, GpuTimer, VectorVariant, read_buffer};
+use crate::contract::ITERATION_BUDGET;
+use crate::contract::primary::BLOCK;
 use crate::counters::{Counters, STATUS_WORDS, WORD_LOOP_CUT, WORD_STATUS};
 use crate::layout::CameraParams;
-use crate::reference::primary_mft::{BLOCK, ITERATION_BUDGET};
 use crate::{Error, Result};
 
 /// Which kernel traces the camera rays.

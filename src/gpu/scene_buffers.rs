@@ -7,9 +7,9 @@ use glam::Vec3;
 
 use super::{GpuContext, storage_buffer};
 use crate::bvh::Bvh;
+use crate::contract::STACK_SIZE;
 use crate::frame::ShadingData;
 use crate::layout::{BvhNode, BvhTriangle};
-use crate::reference::mft::STACK_SIZE;
 use crate::scene::Scene;
 use crate::{Error, Result};
 

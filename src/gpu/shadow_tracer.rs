@@ -12,14 +12,14 @@
 use super::kernel::{Binding, Checks, Kernel, uniform_buffer, uniform_buffer_on};
 pub use super::tracer::Tracer;
 use super::{AdapterSummary, GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer};
+use crate::counters::{Counters, STATUS_WORDS};
 use crate::counters::{WORD_LOOP_CUT, WORD_STATUS};
 use crate::layout::ShadowParams;
-use crate::reference::counters::{Counters, STATUS_WORDS};
 use crate::{Error, Result};
 
-/// 32-bit words of one tile's suspended state (see the kernels; the packet
-/// kernel uses the first 160).
-pub(crate) const STATE_WORDS: u64 = 176;
+/// 32-bit words of one tile's suspended state ([`crate::contract::shadow::STATE_WORDS`];
+/// the packet kernel uses the first 160).
+pub(crate) const STATE_WORDS: u64 = crate::contract::shadow::STATE_WORDS as u64;
 /// Tiles per dispatch along each axis: 128×128 tiles = 512×512 pixels, so
 /// the state buffer stays at 10 MiB and no dispatch runs for long.
 pub(crate) const CHUNK_TILES: u32 = 128;

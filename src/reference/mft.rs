@@ -19,18 +19,11 @@ use crate::bvh::Bvh;
 use crate::layout::{BvhNode, BvhTriangle, GBufferTexel, ShadowParams};
 use crate::sampling::SAMPLES_PER_SET;
 
-/// Depth of the traversal stack; a BVH deeper than this cannot be traced.
-pub const STACK_SIZE: usize = 64;
-/// Widening of a shrunk frustum's light rectangle, in light-edge units: samples
-/// lie at odd multiples of 1/512, so this keeps every active sample 1/1024 of an
-/// edge inside, far above the rounding of the (s, t) arithmetic.
-pub const SHRINK_MARGIN: f32 = 1.0 / 1024.0;
-/// Marks a frustum's `shrunk_for` as set.
-pub const SHRINK_FLAG: u32 = 1 << 31;
-/// Widening of a frustum's bounding box, relative to the size of its
-/// coordinates: its corners are rounded to f32, so the box of the rounded
-/// corners may miss a few ulps of the exact pyramid; 2⁻¹⁸ is far above that.
-pub const BOUNDS_PAD: f32 = 1.0 / 262_144.0;
+pub use crate::contract::STACK_SIZE;
+pub use crate::contract::shadow::{
+    BOUNDS_PAD, SHRINK_FLAG, SHRINK_MARGIN, ST_CAND, ST_LANES, ST_LEAF_MASK, ST_PENDING, ST_SHRUNK,
+    ST_STACK_MASK, ST_STACK_NODE, ST_STATUS, STATE_WORDS, STATUS_SUSPENDED,
+};
 
 /// The box around the origin and the light rectangle's corners, widened by [`BOUNDS_PAD`].
 fn frustum_bounds(o: Vec3, c: &[Vec3; 4]) -> (Vec3, Vec3) {
@@ -560,32 +553,6 @@ pub fn trace_tile_with(
     }
 }
 
-/// 32-bit words of one tile's saved state, in the layout of `shaders/shadow_mft.wgsl`
-/// (its `STATE_WORDS` and `ST_*` offsets): status, first child to visit, mask,
-/// cursor, end, alive, stack depth, flags (1: popping, 2: traversal done), 16 lane
-/// masks, 64 stack nodes, 64 stack masks, the transposed leaf's candidates, the
-/// current leaf's frusta, the pending leaf (first, end, frusta; end 0: none), 3
-/// unused words, and 16 lane words of `shrunk_for`.
-pub const STATE_WORDS: usize = 176;
-/// Word of the status ([`STATUS_SUSPENDED`] while a tile waits to be resumed).
-pub const ST_STATUS: usize = 0;
-/// First of the 16 lane masks.
-pub const ST_LANES: usize = 8;
-/// First of the stack's nodes.
-pub const ST_STACK_NODE: usize = 24;
-/// First of the stack's frustum masks.
-pub const ST_STACK_MASK: usize = 88;
-/// The transposed leaf's candidate frusta.
-pub const ST_CAND: usize = 152;
-/// The current leaf's frusta.
-pub const ST_LEAF_MASK: usize = 153;
-/// First of the pending leaf's three words.
-pub const ST_PENDING: usize = 154;
-/// First of the 16 lane words of `shrunk_for`.
-pub const ST_SHRUNK: usize = 160;
-/// [`ST_STATUS`] of a suspended tile.
-pub const STATUS_SUSPENDED: u32 = 1;
-
 /// What one dispatch of the kernel leaves of a tile.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum TileRun {
@@ -859,65 +826,4 @@ pub fn mft_masks_with_options(
         }
     }
     (masks, counters)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The value of WGSL constant `name` in `kernel` (assembled with `aliases`).
-    fn wgsl_constant(kernel: &str, aliases: &[(&str, &str)], name: &str) -> naga::Literal {
-        let module =
-            naga::front::wgsl::parse_str(&crate::shaders::assemble(kernel, aliases).unwrap()).unwrap();
-        let (_, c) = module
-            .constants
-            .iter()
-            .find(|(_, c)| c.name.as_deref() == Some(name))
-            .unwrap_or_else(|| panic!("{kernel}: no constant {name}"));
-        match module.global_expressions[c.init] {
-            naga::Expression::Literal(l) => l,
-            ref other => panic!("{kernel}: {name} = {other:?}"),
-        }
-    }
-
-    /// The suspended-state layout and the constants the twin shares with
-    /// `shaders/shadow_mft.wgsl` (the kernel's saved words are compared with the twin's
-    /// in tests/gpu_tracers.rs; this names a mismatch on the CPU).
-    #[test]
-    fn the_kernel_has_the_twins_constants() {
-        use naga::Literal::{F32, U32};
-        let u = |v: usize| U32(v as u32);
-        for aliases in [
-            [("shared/vec16", "shared/vec16_subgroup")],
-            [("shared/vec16", "shared/vec16_workgroup")],
-        ] {
-            for (name, value) in [
-                ("STATE_WORDS", u(STATE_WORDS)),
-                ("ST_STATUS", u(ST_STATUS)),
-                ("ST_LANES", u(ST_LANES)),
-                ("ST_STACK_NODE", u(ST_STACK_NODE)),
-                ("ST_STACK_MASK", u(ST_STACK_MASK)),
-                ("ST_CAND", u(ST_CAND)),
-                ("ST_LEAF_MASK", u(ST_LEAF_MASK)),
-                ("ST_PENDING", u(ST_PENDING)),
-                ("ST_SHRUNK", u(ST_SHRUNK)),
-                ("STATUS_SUSPENDED", U32(STATUS_SUSPENDED)),
-                ("STACK_SIZE", u(STACK_SIZE)),
-                ("MASK_FULL", U32(MASK_FULL)),
-                ("MASK_SKY", U32(MASK_SKY)),
-                ("SHRINK_FLAG", U32(SHRINK_FLAG)),
-                ("SHRINK_MARGIN", F32(SHRINK_MARGIN)),
-                ("BOUNDS_PAD", F32(BOUNDS_PAD)),
-                ("WORD_LOOP_CUT", u(crate::counters::WORD_LOOP_CUT)),
-            ] {
-                assert_eq!(
-                    wgsl_constant("shadow_mft", &aliases, name),
-                    value,
-                    "{name} with {aliases:?}"
-                );
-            }
-        }
-        // The host sizes the state buffer by its own copy.
-        assert_eq!(STATE_WORDS as u64, crate::gpu::shadow_tracer::STATE_WORDS);
-    }
 }

@@ -22,13 +22,8 @@ use crate::counters::Counters;
 use crate::frame::{ShadingData, camera_ray};
 use crate::layout::{BvhNode, BvhTriangle, CameraParams, GBufferTexel};
 
-/// Loop iterations a vector may run before it stops and reports its pixels
-/// (the kernel's `ITERATION_BUDGET` default, below lavapipe's 65,535).
-pub const ITERATION_BUDGET: u32 = 60_000;
-/// Depth of the traversal stack.
-pub const STACK_SIZE: usize = 64;
-/// Side of the pixel block one vector traces.
-pub const BLOCK: u32 = 16;
+pub use crate::contract::primary::BLOCK;
+pub use crate::contract::{ITERATION_BUDGET, STACK_SIZE};
 /// A box or triangle is dropped when its depth exceeds every ray's closest `t` by this factor.
 const DEPTH_SLACK: f32 = 1.001;
 /// A ray's `t` before it hits anything (the per-ray kernel's initial `t_best`).

@@ -33,20 +33,7 @@ use crate::reference::shade::unshadowed_irradiance;
 use crate::reference::shadow::{MASK_FULL, per_ray_mask};
 use crate::sampling::{SAMPLES, SETS, pixel_set};
 
-/// Visibility tolerance of the refinement's window test: one ray of 16. A neighbour on
-/// the same surface whose unfiltered visibility differs by more cuts the window, so the
-/// pixel is refined; the filter itself averages neighbours up to two rays apart
-/// ([`FilterParams::DEFAULT_VISIBILITY_TOLERANCE`]). See the module's figures.
-pub const REFINE_VISIBILITY_TOLERANCE: f32 = 1.0 / 16.0;
-
-/// The filter's parameters with the refinement's visibility tolerance: what
-/// `refine_select` gets as its `filter_params`.
-pub fn selection_params(filter: &FilterParams) -> FilterParams {
-    FilterParams {
-        visibility_tolerance: REFINE_VISIBILITY_TOLERANCE,
-        ..*filter
-    }
-}
+pub use crate::contract::refine::{REFINE_VISIBILITY_TOLERANCE, selection_params};
 
 /// Whether pixel `(x, y)` is refined (the filter's inputs as for
 /// [`crate::filter::filter_pixel`]): it has geometry, its unfiltered visibility is not the

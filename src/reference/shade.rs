@@ -7,20 +7,8 @@ use glam::{Vec3, Vec4};
 
 use super::shadow::{MASK_SKY, visibility};
 use crate::layout::{GBufferTexel, ShadeParams};
-use crate::view::QuadLight;
 
-/// Shade parameters for a light and image size.
-pub fn shade_params(light: &QuadLight, width: u32, height: u32) -> ShadeParams {
-    let n = light.area_normal();
-    ShadeParams {
-        light_center: light.center(),
-        light_area: n.length(),
-        light_normal: n.normalize(),
-        width,
-        radiance: light.color * light.intensity,
-        height,
-    }
-}
+pub use crate::contract::shade::shade_params;
 
 /// `(irradiance rgb, visibility)` of one pixel: the light treated as a point
 /// at its centre with its area and cosine falloff for the unshadowed term,

@@ -21,45 +21,9 @@ use crate::bvh::Bvh;
 use crate::layout::{GBufferTexel, ShadowParams};
 use crate::reference::any_hit;
 use crate::sampling::{SAMPLES_PER_SET, pixel_set};
-use crate::view::QuadLight;
 
-/// Shadow rays end at `t_max = 1 − 2⁻¹²`, just short of the light sample, so
-/// geometry that holds the light (a luminaire's own mesh) does not block it.
-pub const SHADOW_T_MAX: f32 = 1.0 - 1.0 / 4096.0;
-/// All 16 rays blocked.
-pub const MASK_FULL: u32 = 0xffff;
-/// Marks a pixel without geometry.
-pub const MASK_SKY: u32 = 1 << 16;
-/// Iterations a vector runs per dispatch before suspending; below lavapipe's
-/// 65,535-iteration loop limit with room for the kernel's other loops: the MFT kernel
-/// adds 16 (the samples below the horizon) and at most 64 each to read and to save a
-/// stack of 64 (60,144 in all; its side-plane setup is unrolled, so shrinking loops
-/// nowhere). A loop that ends early all the same is reported ([`crate::Error::LoopCut`]).
-pub const ITERATION_BUDGET: u32 = 60_000;
-
-/// Shadow parameters for a light and image size (one dispatch over the whole image).
-pub fn shadow_params(light: &QuadLight, width: u32, height: u32) -> ShadowParams {
-    let c = light.corner;
-    let corners = [
-        c,
-        c + light.edge_u,
-        c + light.edge_u + light.edge_v,
-        c + light.edge_v,
-    ];
-    ShadowParams {
-        light_corners: corners.map(|p| p.extend(0.0).to_array()),
-        light_normal: light.area_normal(),
-        t_max: SHADOW_T_MAX,
-        width,
-        height,
-        tile_origin_x: 0,
-        tile_origin_y: 0,
-        tiles_x: width.div_ceil(4),
-        resume: 0,
-        iteration_budget: ITERATION_BUDGET,
-        tiles_y: height.div_ceil(4),
-    }
-}
+pub use crate::contract::ITERATION_BUDGET;
+pub use crate::contract::shadow::{MASK_FULL, MASK_SKY, SHADOW_T_MAX, shadow_params};
 
 /// The light's corners as points.
 pub fn light_corners(params: &ShadowParams) -> [Vec3; 4] {

@@ -56,10 +56,11 @@ use glam::Vec3;
 
 use super::kernel::{Binding, Checks, Kernel, uniform_buffer_on};
 use super::{GpuContext, GpuScene, LeafMode, ShadowTracer, VectorVariant};
+use crate::contract::ITERATION_BUDGET;
+use crate::contract::shadow::shadow_params;
 use crate::filter::{FILTER_KERNEL, FilterParams};
 use crate::frame::RAY_OFFSET_FRACTION;
 use crate::layout::{ImageSize, SurfaceParams};
-use crate::reference::shadow::{ITERATION_BUDGET, shadow_params};
 use crate::{Error, Result, sampling};
 
 /// Workgroups are 8×8 pixels in the per-pixel kernels.

@@ -1,0 +1,77 @@
+//! The contract between the GPU passes ([`crate::gpu`]) and their CPU twins
+//! ([`crate::reference`]): the uniform builders and constants a kernel shares with Rust,
+//! one file per kernel family. Both sides take them from here and neither from the other;
+//! the `#[repr(C)]` structs are in [`crate::layout`] and the status words in
+//! [`crate::counters`]. Tests check the WGSL side of each constant with naga.
+
+pub mod primary;
+pub mod refine;
+pub mod shade;
+pub mod shadow;
+
+/// Loop iterations a vector (or ray) runs per dispatch before it suspends (shadow
+/// kernels) or stops and reports its pixels (primary kernels); below lavapipe's
+/// 65,535-iteration loop limit with room for the kernels' other loops: the MFT shadow
+/// kernel adds 16 (the samples below the horizon) and at most 64 each to read and to save
+/// a stack of 64 (60,144 in all; its side-plane setup is unrolled, so shrinking loops
+/// nowhere). A loop that ends early all the same is reported ([`crate::Error::LoopCut`]).
+pub const ITERATION_BUDGET: u32 = 60_000;
+
+/// Depth of every kernel's traversal stack (`STACK_SIZE` in the kernels); a BVH deeper
+/// than this cannot be traced ([`crate::gpu::validate_for_gpu`]).
+pub const STACK_SIZE: usize = 64;
+
+#[cfg(test)]
+pub(crate) mod tests {
+    /// The value of WGSL constant `name` in `kernel` (assembled with `aliases`), if it has one.
+    pub(crate) fn wgsl_constant_if_any(
+        kernel: &str,
+        aliases: &[(&str, &str)],
+        name: &str,
+    ) -> Option<naga::Literal> {
+        let module =
+            naga::front::wgsl::parse_str(&crate::shaders::assemble(kernel, aliases).unwrap()).unwrap();
+        let (_, c) = module
+            .constants
+            .iter()
+            .find(|(_, c)| c.name.as_deref() == Some(name))?;
+        match module.global_expressions[c.init] {
+            naga::Expression::Literal(l) => Some(l),
+            ref other => panic!("{kernel}: {name} = {other:?}"),
+        }
+    }
+
+    /// [`wgsl_constant_if_any`], which must exist.
+    pub(crate) fn wgsl_constant(kernel: &str, aliases: &[(&str, &str)], name: &str) -> naga::Literal {
+        wgsl_constant_if_any(kernel, aliases, name).unwrap_or_else(|| panic!("{kernel}: no constant {name}"))
+    }
+
+    /// Every kernel variant that declares one of the shared constants declares the value
+    /// Rust uses (the stack depth, the sky and full masks, the status word of loop cuts).
+    #[test]
+    fn every_kernel_declares_the_shared_constants_as_rust_does() {
+        use naga::Literal::U32;
+        let shared = [
+            ("STACK_SIZE", super::STACK_SIZE as u32),
+            ("MASK_SKY", super::shadow::MASK_SKY),
+            ("MASK_FULL", super::shadow::MASK_FULL),
+            ("WORD_LOOP_CUT", crate::counters::WORD_LOOP_CUT as u32),
+            ("WORD_STATUS", crate::counters::WORD_STATUS as u32),
+        ];
+        let mut checked = 0;
+        for &(kernel, variants) in crate::shaders::KERNELS {
+            for &aliases in variants {
+                for (name, value) in shared {
+                    if let Some(v) = wgsl_constant_if_any(kernel, aliases, name) {
+                        assert_eq!(v, U32(value), "{kernel} with {aliases:?}: {name}");
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            checked >= 20,
+            "only {checked} constants found: the kernels' names changed?"
+        );
+    }
+}
