@@ -179,8 +179,9 @@ fn side_plane(a: vec3<f32>, b: vec3<f32>, centre: vec3<f32>) -> vec3<f32> {
 // Light coordinates (s, t) of this lane's 16 samples: its rays go from the
 // origin to c0 + s eu + t ev (reference::mft::Frustum::st).
 var<private> f_st: array<vec2<f32>, 16>;
-var<private> sh_lo: vec2<f32>;
-var<private> sh_hi: vec2<f32>;
+// The light rectangle shrink_to grows over the samples not yet blocked.
+var<private> shrink_lo: vec2<f32>;
+var<private> shrink_hi: vec2<f32>;
 
 // The light's edge vectors and the duals that give a point's (s, t) on it.
 struct LightFrame {
@@ -212,22 +213,22 @@ fn point_st(p: vec3<f32>, lf: LightFrame) -> vec2<f32> {
 // Grows the rectangle by sample j's light coordinates if its ray is not in `blocked`.
 fn stretch(j: u32, blocked: u32) {
     if (blocked & (1u << j)) == 0u {
-        sh_lo = min(sh_lo, f_st[j]);
-        sh_hi = max(sh_hi, f_st[j]);
+        shrink_lo = min(shrink_lo, f_st[j]);
+        shrink_hi = max(shrink_hi, f_st[j]);
     }
 }
 
 fn shrink_to(blocked: u32) {
-    sh_lo = vec2<f32>(1.0);
-    sh_hi = vec2<f32>(0.0);
+    shrink_lo = vec2<f32>(1.0);
+    shrink_hi = vec2<f32>(0.0);
     // Unrolled on purpose: every loop iteration counts towards lavapipe's limit.
     stretch(0u, blocked); stretch(1u, blocked); stretch(2u, blocked); stretch(3u, blocked);
     stretch(4u, blocked); stretch(5u, blocked); stretch(6u, blocked); stretch(7u, blocked);
     stretch(8u, blocked); stretch(9u, blocked); stretch(10u, blocked); stretch(11u, blocked);
     stretch(12u, blocked); stretch(13u, blocked); stretch(14u, blocked); stretch(15u, blocked);
     let lf = light_frame();
-    let lo = max(sh_lo - SHRINK_MARGIN, vec2<f32>(0.0));
-    let hi = min(sh_hi + SHRINK_MARGIN, vec2<f32>(1.0));
+    let lo = max(shrink_lo - SHRINK_MARGIN, vec2<f32>(0.0));
+    let hi = min(shrink_hi + SHRINK_MARGIN, vec2<f32>(1.0));
     f_corner[0] = lf.c0 + lf.eu * lo.x + lf.ev * lo.y;
     f_corner[1] = lf.c0 + lf.eu * hi.x + lf.ev * lo.y;
     f_corner[2] = lf.c0 + lf.eu * hi.x + lf.ev * hi.y;
