@@ -1,5 +1,7 @@
 //! Compute pipelines with explicit bind group layouts (with `layout: None`,
-//! wgpu drops bindings a kernel does not use and bind groups stop matching).
+//! wgpu drops bindings a kernel does not use and bind groups stop matching). The
+//! layout is read from the kernel's own declarations ([`reflect_bindings`]), so no
+//! binding list is typed by hand.
 
 use super::GpuContext;
 use crate::shaders::{self, Aliases};
@@ -50,15 +52,73 @@ impl Binding {
     }
 }
 
+/// What group 0 of a kernel declares, in binding order: each binding's kind and the name
+/// of its variable. Errors name the variable whose kind [`Binding`] has no case for,
+/// a binding outside group 0, or a gap in the numbers (binding `i` must be the `i`-th).
+pub fn reflect_bindings(module: &naga::Module) -> std::result::Result<Vec<(Binding, String)>, String> {
+    use naga::{
+        AddressSpace, ImageClass, ImageDimension, ScalarKind, StorageAccess, StorageFormat, TypeInner,
+    };
+    let mut found = Vec::new();
+    for (_, var) in module.global_variables.iter() {
+        let Some(rb) = &var.binding else { continue };
+        let name = var.name.clone().unwrap_or_default();
+        if rb.group != 0 {
+            return Err(format!(
+                "`{name}` is in group {}; kernels use group 0 only",
+                rb.group
+            ));
+        }
+        let binding = match (var.space, &module.types[var.ty].inner) {
+            (AddressSpace::Uniform, _) => Binding::Uniform,
+            (AddressSpace::Storage { access }, _) if access.contains(StorageAccess::STORE) => {
+                Binding::ReadWrite
+            }
+            (AddressSpace::Storage { .. }, _) => Binding::ReadOnly,
+            (
+                AddressSpace::Handle,
+                &TypeInner::Image {
+                    dim: ImageDimension::D2,
+                    arrayed: false,
+                    class,
+                },
+            ) => match class {
+                ImageClass::Depth { multi: false } => Binding::DepthTexture,
+                ImageClass::Sampled {
+                    kind: ScalarKind::Float,
+                    multi: false,
+                } => Binding::FloatTexture,
+                ImageClass::Storage {
+                    format: StorageFormat::R32Float,
+                    access,
+                } if access == StorageAccess::STORE => Binding::StorageTexture(wgpu::TextureFormat::R32Float),
+                other => return Err(format!("`{name}`: no bind group layout for a {other:?} texture")),
+            },
+            (space, inner) => return Err(format!("`{name}`: no bind group layout for {space:?} {inner:?}")),
+        };
+        found.push((rb.binding, binding, name));
+    }
+    found.sort_by_key(|f| f.0);
+    if let Some((i, f)) = found.iter().enumerate().find(|(i, f)| f.0 != *i as u32) {
+        return Err(format!(
+            "binding {i} is missing (the next is `{}` at {})",
+            f.2, f.0
+        ));
+    }
+    Ok(found.into_iter().map(|(_, b, n)| (b, n)).collect())
+}
+
 /// A compute pipeline for entry point `main` and the layout of its group 0.
 #[derive(Debug)]
 pub struct Kernel {
     /// The pipeline.
     pub pipeline: wgpu::ComputePipeline,
-    /// Layout of bind group 0: binding `i` is `bindings[i]`.
+    /// Layout of bind group 0, as [`Kernel::bindings`] says.
     pub layout: wgpu::BindGroupLayout,
     /// The kernel's name (its file under `shaders/`).
     pub name: String,
+    /// Binding `i` of group 0: its kind and its variable's name in the kernel.
+    pub bindings: Vec<(Binding, String)>,
 }
 
 /// How much naga may guard a kernel.
@@ -74,18 +134,19 @@ pub enum Checks {
 }
 
 impl Kernel {
-    /// Assembles `main` with `aliases`, validates it with naga and builds its pipeline.
+    /// Assembles `main` with `aliases`, validates it with naga and builds its pipeline,
+    /// with the bind group layout its declarations give ([`reflect_bindings`]).
     pub fn new(
         ctx: &GpuContext,
         main: &str,
         aliases: Aliases<'_>,
-        bindings: &[Binding],
         constants: &[(&str, f64)],
         checks: Checks,
     ) -> Result<Kernel> {
         let source =
             shaders::assemble(main, aliases).map_err(|e| Error::Gpu(format!("shader {main}: {e}")))?;
-        shaders::validate(&source).map_err(|e| Error::Gpu(format!("shader {main}: {e}")))?;
+        let module = shaders::validate(&source).map_err(|e| Error::Gpu(format!("shader {main}: {e}")))?;
+        let bindings = reflect_bindings(&module).map_err(|e| Error::Gpu(format!("shader {main}: {e}")))?;
         ctx.capture_errors(main, || {
             let desc = wgpu::ShaderModuleDescriptor {
                 label: Some(main),
@@ -102,7 +163,7 @@ impl Kernel {
             let entries: Vec<wgpu::BindGroupLayoutEntry> = bindings
                 .iter()
                 .enumerate()
-                .map(|(i, b)| wgpu::BindGroupLayoutEntry {
+                .map(|(i, (b, _))| wgpu::BindGroupLayoutEntry {
                     binding: i as u32,
                     visibility: wgpu::ShaderStages::COMPUTE,
                     ty: b.layout_type(),
@@ -139,6 +200,7 @@ impl Kernel {
                 pipeline,
                 layout,
                 name: main.to_owned(),
+                bindings,
             }
         })
     }
@@ -210,4 +272,83 @@ pub fn uniform_buffer_on<T: bytemuck::Pod>(device: &wgpu::Device, label: &str, v
         contents: bytemuck::bytes_of(value),
         usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every binding kind is read from its declaration, in binding order whatever the
+    /// order of the declarations; a gap or an unsupported kind is an error naming it.
+    #[test]
+    fn bindings_are_read_from_the_declarations() {
+        let wgsl = "
+            @group(0) @binding(2) var<storage, read_write> out: array<u32>;
+            @group(0) @binding(0) var<uniform> params: vec4<u32>;
+            @group(0) @binding(1) var<storage, read> input: array<u32>;
+            @group(0) @binding(3) var depth: texture_depth_2d;
+            @group(0) @binding(4) var colour: texture_2d<f32>;
+            @group(0) @binding(5) var target_: texture_storage_2d<r32float, write>;
+            @compute @workgroup_size(1) fn main() {}
+        ";
+        let module = naga::front::wgsl::parse_str(wgsl).unwrap();
+        let kinds: Vec<Binding> = reflect_bindings(&module)
+            .unwrap()
+            .into_iter()
+            .map(|(b, _)| b)
+            .collect();
+        use Binding::*;
+        assert_eq!(
+            kinds,
+            [
+                Uniform,
+                ReadOnly,
+                ReadWrite,
+                DepthTexture,
+                FloatTexture,
+                StorageTexture(wgpu::TextureFormat::R32Float)
+            ]
+        );
+        let gap = naga::front::wgsl::parse_str(
+            "@group(0) @binding(1) var<uniform> p: vec4<u32>; @compute @workgroup_size(1) fn main() {}",
+        )
+        .unwrap();
+        let err = reflect_bindings(&gap).unwrap_err();
+        assert!(
+            err.contains("binding 0 is missing") && err.contains("`p`"),
+            "{err}"
+        );
+        let int_texture = naga::front::wgsl::parse_str(
+            "@group(0) @binding(0) var t: texture_2d<u32>; @compute @workgroup_size(1) fn main() {}",
+        )
+        .unwrap();
+        assert!(reflect_bindings(&int_texture).unwrap_err().contains("`t`"));
+    }
+
+    /// Every kernel variant the passes build has a layout the reflection can make.
+    #[test]
+    fn every_kernel_variant_has_a_bind_group_layout() {
+        for &(kernel, variants) in crate::shaders::KERNELS {
+            for &aliases in variants {
+                let module =
+                    crate::shaders::validate(&crate::shaders::assemble(kernel, aliases).unwrap()).unwrap();
+                let bindings =
+                    reflect_bindings(&module).unwrap_or_else(|e| panic!("{kernel} {aliases:?}: {e}"));
+                assert!(!bindings.is_empty(), "{kernel}: no bindings");
+            }
+        }
+        // The embedded pass's storage texture is the format its targets are made in.
+        let module =
+            crate::shaders::validate(&crate::shaders::assemble("visibility_to_texture", &[]).unwrap())
+                .unwrap();
+        let kinds: Vec<Binding> = reflect_bindings(&module)
+            .unwrap()
+            .into_iter()
+            .map(|(b, _)| b)
+            .collect();
+        assert!(
+            kinds.contains(&Binding::StorageTexture(crate::gpu::VISIBILITY_FORMAT)),
+            "{kinds:?}"
+        );
+    }
 }

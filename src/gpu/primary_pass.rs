@@ -14,7 +14,7 @@
 //! ends any other way (the driver ended it: a budget above its limit) is counted
 //! in status word [`WORD_LOOP_CUT`] and is an [`Error::LoopCut`].
 
-use super::kernel::{Binding, Checks, Kernel, uniform_buffer};
+use super::kernel::{Checks, Kernel, uniform_buffer};
 use super::{GpuContext, GpuScene, GpuTimer, VectorVariant, read_buffer};
 use crate::contract::ITERATION_BUDGET;
 use crate::contract::primary::BLOCK;
@@ -146,14 +146,10 @@ impl PrimaryPass {
                 ("primary_mft", aliases, Some(variant), per_wg)
             }
         };
-        use Binding::*;
         let kernel = Kernel::new(
             ctx,
             name,
             aliases,
-            &[
-                Uniform, ReadOnly, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadWrite, ReadOnly, ReadOnly,
-            ],
             &constants,
             // Indices: BVH ranges validated by GpuScene::new, stack indices clamped,
             // pixels bounded by the camera's size (the G-buffer the host binds must

@@ -12,7 +12,7 @@
 //! kernel then traces a pixel's 256 rays as one vector of 16 frusta that share their
 //! origin, and its masks are the oracle's, as for every frame.
 
-use super::kernel::{Binding, Checks, Kernel, uniform_buffer};
+use super::kernel::{Checks, Kernel, uniform_buffer};
 use super::shadow_tracer::ShadowTracer;
 use super::{GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer};
 use crate::layout::{GBufferTexel, RefineParams, ShadowParams};
@@ -60,18 +60,11 @@ pub struct Refinement {
 impl Refinement {
     /// Builds the pipelines.
     pub fn new(ctx: &GpuContext) -> Result<Refinement> {
-        use Binding::*;
-        let kernel = |name, bindings: &[Binding]| Kernel::new(ctx, name, &[], bindings, &[], Checks::Checked);
+        let kernel = |name| Kernel::new(ctx, name, &[], &[], Checks::Checked);
         Ok(Refinement {
-            select: kernel(
-                "refine_select",
-                &[Uniform, ReadOnly, ReadOnly, ReadOnly, ReadWrite],
-            )?,
-            gather: kernel("refine_gather", &[Uniform, ReadOnly, ReadOnly, ReadWrite])?,
-            resolve: kernel(
-                "refine_resolve",
-                &[Uniform, Uniform, ReadOnly, ReadOnly, ReadOnly, ReadWrite],
-            )?,
+            select: kernel("refine_select")?,
+            gather: kernel("refine_gather")?,
+            resolve: kernel("refine_resolve")?,
         })
     }
 

@@ -5,7 +5,7 @@ use std::sync::OnceLock;
 
 use glam::Vec3;
 
-use super::kernel::{Binding, Checks, Kernel, uniform_buffer};
+use super::kernel::{Checks, Kernel, uniform_buffer};
 use super::primary_pass::{PrimaryPass, PrimaryStatus, PrimaryTracer};
 use super::refine::{RefineBuffers, Refinement};
 use super::shadow_tracer::{LeafMode, ShadowStats, ShadowTracer, Tracer, TracerOptions, VectorVariant};
@@ -197,7 +197,6 @@ impl Renderer {
     /// shadow pass's vector variant and leaf mode.
     pub fn new(ctx: &GpuContext, options: impl Into<RendererOptions>) -> Result<Renderer> {
         let options = options.into();
-        use Binding::*;
         Ok(Renderer {
             primary: PrimaryPass::with_iteration_budget(
                 ctx,
@@ -232,20 +231,10 @@ impl Renderer {
                 ctx,
                 "shade",
                 &[],
-                &[
-                    Uniform, ReadOnly, ReadOnly, ReadWrite, ReadWrite, ReadWrite, ReadWrite,
-                ],
                 &[("REFERENCE_RAYS", f64::from(reference_rays(options.tracer)))],
                 Checks::Checked,
             )?,
-            filter: Kernel::new(
-                ctx,
-                FILTER_KERNEL,
-                &[],
-                &[Uniform, ReadOnly, ReadOnly, ReadOnly, ReadWrite],
-                &[],
-                Checks::Checked,
-            )?,
+            filter: Kernel::new(ctx, FILTER_KERNEL, &[], &[], Checks::Checked)?,
             refinement: OnceLock::new(),
         })
     }

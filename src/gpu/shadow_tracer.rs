@@ -9,7 +9,7 @@
 //! A loop that ends any other way (a budget above the driver's limit) is counted
 //! in the status word [`WORD_LOOP_CUT`] and the pass fails with [`Error::LoopCut`].
 
-use super::kernel::{Binding, Checks, Kernel, uniform_buffer, uniform_buffer_on};
+use super::kernel::{Checks, Kernel, uniform_buffer, uniform_buffer_on};
 pub use super::tracer::Tracer;
 use super::{AdapterSummary, GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer};
 use crate::counters::{Counters, STATUS_WORDS};
@@ -239,14 +239,10 @@ impl ShadowTracer {
         } else {
             &[]
         };
-        use Binding::*;
         let kernel = Kernel::new(
             ctx,
             tracer.kernel(),
             aliases,
-            &[
-                Uniform, ReadOnly, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadWrite, ReadWrite,
-            ],
             &constants,
             // Indices: BVH ranges validated by GpuScene::new, stack indices clamped,
             // pixel and state slots bounded by the parameters the host sets here; the

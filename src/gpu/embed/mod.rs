@@ -54,7 +54,7 @@ pub use targets::{ShadowTargets, VISIBILITY_FORMAT};
 
 use glam::Vec3;
 
-use super::kernel::{Binding, Checks, Kernel, uniform_buffer_on};
+use super::kernel::{Checks, Kernel, uniform_buffer_on};
 use super::{GpuContext, GpuScene, LeafMode, ShadowTracer, VectorVariant};
 use crate::contract::ITERATION_BUDGET;
 use crate::contract::shadow::shadow_params;
@@ -167,55 +167,16 @@ impl ShadowPass {
     /// variant does not fit the device's subgroup size or a pipeline fails to build.
     pub fn new(ctx: &GpuContext, settings: ShadowSettings) -> Result<ShadowPass> {
         check_device(&ctx.device, &settings)?;
-        use Binding::*;
-        let surface_kernel = |name: &str, surface: Binding| {
-            Kernel::new(
-                ctx,
-                name,
-                &[],
-                &[
-                    Uniform,
-                    surface,
-                    FloatTexture,
-                    FloatTexture,
-                    ReadWrite,
-                    ReadWrite,
-                    ReadWrite,
-                ],
-                &[],
-                Checks::Checked,
-            )
-        };
+        let kernel = |name: &str| Kernel::new(ctx, name, &[], &[], Checks::Checked);
         Ok(ShadowPass {
             device: ctx.device.clone(),
             settings,
             tracer: ShadowTracer::new(ctx, settings.variant, settings.leaf_mode)?,
-            from_depth: surface_kernel("gbuffer_from_depth", DepthTexture)?,
-            from_position: surface_kernel("gbuffer_from_position", FloatTexture)?,
-            values: Kernel::new(
-                ctx,
-                "visibility_values",
-                &[],
-                &[Uniform, ReadOnly, ReadWrite],
-                &[],
-                Checks::Checked,
-            )?,
-            to_texture: Kernel::new(
-                ctx,
-                "visibility_to_texture",
-                &[],
-                &[Uniform, ReadOnly, StorageTexture(VISIBILITY_FORMAT)],
-                &[],
-                Checks::Checked,
-            )?,
-            filter: Kernel::new(
-                ctx,
-                FILTER_KERNEL,
-                &[],
-                &[Uniform, ReadOnly, ReadOnly, ReadOnly, ReadWrite],
-                &[],
-                Checks::Checked,
-            )?,
+            from_depth: kernel("gbuffer_from_depth")?,
+            from_position: kernel("gbuffer_from_position")?,
+            values: kernel("visibility_values")?,
+            to_texture: kernel("visibility_to_texture")?,
+            filter: kernel(FILTER_KERNEL)?,
         })
     }
 
