@@ -275,16 +275,13 @@ fn cases(args: &BenchArgs) -> Result<Vec<Case>> {
                 scene.add_ground_plane(y);
             }
             // As render does (scene_arg::load_scene_and_view): far scenes are traced at the origin.
-            let shift = scene.recentre();
+            let mut view = view;
+            super::scene_arg::recentre(&mut scene, &mut view);
             out.push(Case {
                 name: name.clone(),
                 view_name,
                 scene,
-                view: if shift == glam::Vec3::ZERO {
-                    view
-                } else {
-                    view.translated(-shift)
-                },
+                view,
             });
         }
     };

@@ -64,9 +64,8 @@ pub fn load_scene_and_view(scene_arg: Option<&Path>, view_arg: Option<&Path>) ->
     if let Some(y) = view.ground_y {
         scene.add_ground_plane(y);
     }
-    let shift = scene.recentre();
+    let shift = recentre(&mut scene, &mut view);
     if shift != glam::Vec3::ZERO {
-        view = view.translated(-shift);
         eprintln!(
             "note: {}: the scene lies {:.0} from the origin; it is traced moved by {:?} so that \
              f32 keeps its precision (images are the same as seen from the view)",
@@ -79,4 +78,14 @@ pub fn load_scene_and_view(scene_arg: Option<&Path>, view_arg: Option<&Path>) ->
         eprintln!("warning: {}: {w}", scene.source.display());
     }
     Ok((scene, view))
+}
+
+/// Moves a far scene and its view to the origin ([`Scene::recentre`]); returns the offset
+/// (zero, and both left as they were, for a scene near the origin).
+pub fn recentre(scene: &mut Scene, view: &mut View) -> glam::Vec3 {
+    let shift = scene.recentre();
+    if shift != glam::Vec3::ZERO {
+        *view = view.translated(-shift);
+    }
+    shift
 }

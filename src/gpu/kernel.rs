@@ -278,6 +278,19 @@ pub fn uniform_buffer_on<T: bytemuck::Pod>(device: &wgpu::Device, label: &str, v
 mod tests {
     use super::*;
 
+    /// The binding kinds [`reflect_bindings`] reads from `wgsl`.
+    fn kinds(wgsl: &str) -> std::result::Result<Vec<Binding>, String> {
+        let module = naga::front::wgsl::parse_str(wgsl).map_err(|e| e.to_string())?;
+        Ok(reflect_bindings(&module)?.into_iter().map(|(b, _)| b).collect())
+    }
+
+    /// [`kinds`] of a kernel as the passes assemble it.
+    fn kernel_kinds(kernel: &str, aliases: Aliases<'_>) -> std::result::Result<Vec<Binding>, String> {
+        let source = crate::shaders::assemble(kernel, aliases)?;
+        crate::shaders::validate(&source)?;
+        kinds(&source)
+    }
+
     /// Every binding kind is read from its declaration, in binding order whatever the
     /// order of the declarations; a gap or an unsupported kind is an error naming it.
     #[test]
@@ -291,15 +304,9 @@ mod tests {
             @group(0) @binding(5) var target_: texture_storage_2d<r32float, write>;
             @compute @workgroup_size(1) fn main() {}
         ";
-        let module = naga::front::wgsl::parse_str(wgsl).unwrap();
-        let kinds: Vec<Binding> = reflect_bindings(&module)
-            .unwrap()
-            .into_iter()
-            .map(|(b, _)| b)
-            .collect();
         use Binding::*;
         assert_eq!(
-            kinds,
+            kinds(wgsl).unwrap(),
             [
                 Uniform,
                 ReadOnly,
@@ -309,20 +316,18 @@ mod tests {
                 StorageTexture(wgpu::TextureFormat::R32Float)
             ]
         );
-        let gap = naga::front::wgsl::parse_str(
+        let err = kinds(
             "@group(0) @binding(1) var<uniform> p: vec4<u32>; @compute @workgroup_size(1) fn main() {}",
         )
-        .unwrap();
-        let err = reflect_bindings(&gap).unwrap_err();
+        .unwrap_err();
         assert!(
             err.contains("binding 0 is missing") && err.contains("`p`"),
             "{err}"
         );
-        let int_texture = naga::front::wgsl::parse_str(
-            "@group(0) @binding(0) var t: texture_2d<u32>; @compute @workgroup_size(1) fn main() {}",
-        )
-        .unwrap();
-        assert!(reflect_bindings(&int_texture).unwrap_err().contains("`t`"));
+        let err =
+            kinds("@group(0) @binding(0) var t: texture_2d<u32>; @compute @workgroup_size(1) fn main() {}")
+                .unwrap_err();
+        assert!(err.contains("`t`"), "{err}");
     }
 
     /// Every kernel variant the passes build has a layout the reflection can make.
@@ -330,22 +335,13 @@ mod tests {
     fn every_kernel_variant_has_a_bind_group_layout() {
         for &(kernel, variants) in crate::shaders::KERNELS {
             for &aliases in variants {
-                let module =
-                    crate::shaders::validate(&crate::shaders::assemble(kernel, aliases).unwrap()).unwrap();
                 let bindings =
-                    reflect_bindings(&module).unwrap_or_else(|e| panic!("{kernel} {aliases:?}: {e}"));
+                    kernel_kinds(kernel, aliases).unwrap_or_else(|e| panic!("{kernel} {aliases:?}: {e}"));
                 assert!(!bindings.is_empty(), "{kernel}: no bindings");
             }
         }
         // The embedded pass's storage texture is the format its targets are made in.
-        let module =
-            crate::shaders::validate(&crate::shaders::assemble("visibility_to_texture", &[]).unwrap())
-                .unwrap();
-        let kinds: Vec<Binding> = reflect_bindings(&module)
-            .unwrap()
-            .into_iter()
-            .map(|(b, _)| b)
-            .collect();
+        let kinds = kernel_kinds("visibility_to_texture", &[]).unwrap();
         assert!(
             kinds.contains(&Binding::StorageTexture(crate::gpu::VISIBILITY_FORMAT)),
             "{kinds:?}"

@@ -69,40 +69,32 @@ pub fn validate_for_gpu(bvh: &Bvh) -> Result<()> {
     Ok(())
 }
 
-/// `nodes` relative to `origin` (the same slice when it is zero). Rounding is monotonic,
-/// so a box still holds its triangles' moved corners.
-pub(super) fn nodes_from(nodes: &[BvhNode], origin: Vec3) -> Cow<'_, [BvhNode]> {
+/// `items` with `shift` moving each by `-origin` (the same slice when it is zero).
+fn relative<T: Clone>(items: &[T], origin: Vec3, shift: impl Fn(&T, Vec3) -> T) -> Cow<'_, [T]> {
     if origin == Vec3::ZERO {
-        return Cow::Borrowed(nodes);
+        return Cow::Borrowed(items);
     }
-    Cow::Owned(
-        nodes
-            .iter()
-            .map(|n| BvhNode {
-                bmin: n.bmin - origin,
-                bmax: n.bmax - origin,
-                ..*n
-            })
-            .collect(),
-    )
+    Cow::Owned(items.iter().map(|x| shift(x, origin)).collect())
 }
 
-/// `triangles` relative to `origin` (the same slice when it is zero).
+/// `nodes` relative to `origin`. Rounding is monotonic, so a box still holds its
+/// triangles' moved corners.
+pub(super) fn nodes_from(nodes: &[BvhNode], origin: Vec3) -> Cow<'_, [BvhNode]> {
+    relative(nodes, origin, |n, o| BvhNode {
+        bmin: n.bmin - o,
+        bmax: n.bmax - o,
+        ..*n
+    })
+}
+
+/// `triangles` relative to `origin`.
 pub(super) fn triangles_from(triangles: &[BvhTriangle], origin: Vec3) -> Cow<'_, [BvhTriangle]> {
-    if origin == Vec3::ZERO {
-        return Cow::Borrowed(triangles);
-    }
-    Cow::Owned(
-        triangles
-            .iter()
-            .map(|t| BvhTriangle {
-                v0: t.v0 - origin,
-                v1: t.v1 - origin,
-                v2: t.v2 - origin,
-                ..*t
-            })
-            .collect(),
-    )
+    relative(triangles, origin, |t, o| BvhTriangle {
+        v0: t.v0 - o,
+        v1: t.v1 - o,
+        v2: t.v2 - o,
+        ..*t
+    })
 }
 
 impl GpuScene {
