@@ -17,9 +17,9 @@ use std::time::Instant;
 use glam::Vec3;
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::gpu::{FrameSettings, GpuContext, GpuOptions, GpuScene, Renderer, RendererOptions, Tracer};
-use penumbra::reference::shadow::visibility;
+use penumbra::reference::shadow_per_ray::visibility;
 use penumbra::scene::Scene;
-use penumbra::view::View;
+use penumbra::scene::view::View;
 
 fn main() -> penumbra::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();

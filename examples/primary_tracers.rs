@@ -9,13 +9,13 @@
 use std::path::PathBuf;
 
 use penumbra::bvh::{Bvh, BvhSettings};
-use penumbra::frame::{RAY_OFFSET_FRACTION, camera_params};
+use penumbra::contract::layout::GBufferTexel;
 use penumbra::gpu::{
     GpuContext, GpuOptions, GpuScene, GpuTimer, PrimaryPass, PrimaryTracer, empty_storage_buffer,
 };
-use penumbra::layout::GBufferTexel;
+use penumbra::pass_inputs::{RAY_OFFSET_FRACTION, camera_params};
 use penumbra::scene::Scene;
-use penumbra::view::View;
+use penumbra::scene::view::View;
 
 fn main() -> penumbra::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();

@@ -1,5 +1,5 @@
 // G-buffer from a host's depth and normal textures: world position by unprojecting the depth.
-// Recorded by ShadowPass::record (src/gpu/embed/mod.rs) before the shadow pass; CPU twin: src/reference/surface.rs.
+// Recorded by ShadowPass::record (src/gpu/embed/mod.rs) before the shadow pass; CPU twin: src/reference/gbuffer_from_surface.rs.
 
 #import shared/frame
 #import shared/surface

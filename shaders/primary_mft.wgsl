@@ -30,8 +30,8 @@
 // give one ray exactly the same t the two kernels may keep different ones.
 
 // Bindings 1 and 2 of the primary pass (shared/primary), as words: read by shared/bvh_vec16.
-@group(0) @binding(1) var<storage, read> node_words: array<u32>;
-@group(0) @binding(2) var<storage, read> triangle_words: array<u32>;
+@group(0) @binding(1) var<storage, read> nodes: array<u32>;
+@group(0) @binding(2) var<storage, read> triangles: array<u32>;
 
 // The triangle a lane's ray hit, for shared/primary's texel (lanes differ).
 fn hit_triangle(t: u32) -> BvhTriangle {

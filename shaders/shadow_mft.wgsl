@@ -1,5 +1,5 @@
 // Multi-frusta soft shadows: one 16-wide vector per 4x4 tile, lane = pixel = frustum of 16 rays.
-// Dispatched by the shadow pass (src/gpu/shadow_tracer.rs); CPU twin: src/reference/mft.rs.
+// Dispatched by the shadow pass (src/gpu/shadow_tracer.rs); CPU twin: src/reference/shadow_mft.rs.
 
 #import shared/bvh
 #import shared/counters
@@ -49,8 +49,8 @@ const BOUNDS_PAD: f32 = 1.0 / 262144.0;  // 2^-18
 
 @group(0) @binding(0) var<uniform> params: ShadowParams;
 // The BVH as 32-bit words (shared/bvh layouts), read through shared/bvh_vec16.
-@group(0) @binding(1) var<storage, read> node_words: array<u32>;
-@group(0) @binding(2) var<storage, read> triangle_words: array<u32>;
+@group(0) @binding(1) var<storage, read> nodes: array<u32>;
+@group(0) @binding(2) var<storage, read> triangles: array<u32>;
 @group(0) @binding(3) var<storage, read> gbuffer: array<GBufferTexel>;
 @group(0) @binding(4) var<storage, read> light_points: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> masks: array<u32>;

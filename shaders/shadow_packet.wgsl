@@ -1,5 +1,5 @@
 // Packet-traced soft shadows, the paper's baseline: one 16-wide vector per pixel, lane = one of its 16 rays.
-// Dispatched by the shadow tracer (src/gpu/shadow_tracer.rs, Tracer::Packet); CPU twin: src/reference/packet.rs.
+// Dispatched by the shadow tracer (src/gpu/shadow_tracer.rs, Tracer::Packet); CPU twin: src/reference/shadow_packet.rs.
 
 #import shared/bvh
 #import shared/counters
@@ -24,8 +24,8 @@ const STATUS_SUSPENDED: u32 = 1u;
 
 @group(0) @binding(0) var<uniform> params: ShadowParams;
 // The BVH as 32-bit words (shared/bvh layouts), read through shared/bvh_vec16.
-@group(0) @binding(1) var<storage, read> node_words: array<u32>;
-@group(0) @binding(2) var<storage, read> triangle_words: array<u32>;
+@group(0) @binding(1) var<storage, read> nodes: array<u32>;
+@group(0) @binding(2) var<storage, read> triangles: array<u32>;
 @group(0) @binding(3) var<storage, read> gbuffer: array<GBufferTexel>;
 @group(0) @binding(4) var<storage, read> light_points: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> masks: array<u32>;

@@ -3,12 +3,38 @@
 //!
 //! The pipeline: [`scene::Scene::load`] reads a glTF file into world-space
 //! triangles, [`bvh::Bvh::build`] builds a BVH of 32-byte nodes with triangles
-//! in leaf order, and [`reference`](mod@reference) traces rays over exactly the data the GPU
-//! reads (it is the oracle for every GPU kernel).
+//! in leaf order, the GPU kernels trace it, and [`reference`](mod@reference) traces rays
+//! over exactly the data the GPU reads (it is the oracle for every GPU kernel). What both
+//! sides share — layouts, uniforms, constants — is [`contract`]; the README's
+//! "Architecture" section maps the folders to the pipeline's stages.
 //!
 //! On the GPU, [`gpu::Renderer`] renders whole frames; an application with its own wgpu
 //! device adds the soft shadows to its frame with [`gpu::ShadowPass`] (see [`gpu::embed`]
 //! and `examples/embed/`), and moves objects with [`gpu::GpuScene::set_transforms`].
+//!
+//! Rendering the built-in scene's soft shadows on the GPU and writing the image (what
+//! `penumbra render` does; on a machine without a GPU, lavapipe runs it):
+//!
+//! ```
+//! use penumbra::gpu::{FrameSettings, GpuContext, GpuOptions, GpuScene, Renderer, RendererOptions};
+//! use penumbra::output::{HdrImage, ToneMap, write_image};
+//! use penumbra::{assets, bvh::{Bvh, BvhSettings}, scene::Scene};
+//!
+//! let default = assets::default_scene();
+//! let scene = Scene::from_bytes(default.glb, std::path::Path::new(default.file_name))?;
+//! let bvh = Bvh::build(&scene, &BvhSettings::default())?;
+//! let ctx = GpuContext::new(&GpuOptions::default())?; // an error naming the cause without an adapter
+//! let gpu_scene = GpuScene::new(&ctx, &scene, &bvh)?;
+//! let renderer = Renderer::new(&ctx, RendererOptions::default())?;
+//! let frame = renderer.render(&ctx, &gpu_scene, &default.view(), &FrameSettings::new(128, 96))?;
+//! let image = HdrImage { width: frame.width, height: frame.height, pixels: frame.radiance() };
+//! let path = std::env::temp_dir().join(format!("penumbra-doc-{}.png", std::process::id()));
+//! write_image(&path, &image, &ToneMap::default())?; // whole or not at all
+//! # std::fs::remove_file(&path).ok();
+//! # Ok::<(), penumbra::Error>(())
+//! ```
+//!
+//! The CPU side is public too: the oracles trace the same data, ray by ray.
 //!
 //! ```
 //! use penumbra::{assets, bvh::{Bvh, BvhSettings}, reference, scene::Scene};
@@ -25,21 +51,15 @@
 pub mod assets;
 pub mod bvh;
 pub mod contract;
-pub mod counters;
 mod error;
-pub mod error_regions;
-pub mod filter;
-pub mod frame;
 pub mod gpu;
-pub mod layout;
-pub mod metrics;
 pub mod output;
+pub mod pass_inputs;
+pub mod quality;
 pub mod reference;
 pub mod sampling;
 pub mod scene;
 pub mod shaders;
-pub mod view;
-pub mod view_checks;
 
 pub use error::{Error, Result};
 

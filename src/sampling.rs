@@ -16,7 +16,7 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::view::QuadLight;
+use crate::scene::view::QuadLight;
 
 /// Number of sample sets (one per pixel of a 4×4 tile).
 pub const SETS: usize = 16;

@@ -137,7 +137,7 @@ fn objects_rest_on_the_ground() {
 
 /// Irradiance at `point` on an upward-facing surface, unoccluded, by
 /// midpoint integration over the light.
-fn irradiance(light: &penumbra::view::QuadLight, point: Vec3) -> f32 {
+fn irradiance(light: &penumbra::scene::view::QuadLight, point: Vec3) -> f32 {
     let n = 64;
     let area = light.area_normal().length();
     let light_normal = light.area_normal() / area;

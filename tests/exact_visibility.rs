@@ -9,13 +9,13 @@ use std::path::Path;
 
 use glam::Vec3;
 use penumbra::bvh::{Bvh, BvhSettings};
-use penumbra::frame::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
-use penumbra::layout::GBufferTexel;
+use penumbra::contract::layout::GBufferTexel;
+use penumbra::pass_inputs::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
 use penumbra::reference::any_hit;
 use penumbra::reference::exact::{ExactImageOptions, exact_visibility, exact_visibility_image_with};
 use penumbra::reference::primary::primary_gbuffer;
-use penumbra::reference::shadow::{SHADOW_T_MAX, per_ray_mask, shadow_params};
-use penumbra::view::QuadLight;
+use penumbra::reference::shadow_per_ray::{SHADOW_T_MAX, per_ray_mask, shadow_params};
+use penumbra::scene::view::QuadLight;
 use penumbra::{Error, assets, sampling, scene::Scene};
 use support::Rng;
 

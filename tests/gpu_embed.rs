@@ -13,15 +13,16 @@ mod raster;
 
 use penumbra::Error;
 use penumbra::bvh::{Bvh, BvhSettings};
-use penumbra::filter::{FilterParams, discontinuity_filter};
+use penumbra::contract::filter::FilterParams;
+use penumbra::contract::layout::GBufferTexel;
 use penumbra::gpu::{
     FrameSettings, GpuContext, GpuScene, Renderer, ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets,
     SurfaceInput, VectorVariant, read_buffer,
 };
-use penumbra::layout::GBufferTexel;
-use penumbra::reference::shadow::visibility;
+use penumbra::reference::filter::discontinuity_filter;
+use penumbra::reference::shadow_per_ray::visibility;
 use penumbra::scene::Scene;
-use penumbra::view::View;
+use penumbra::scene::view::View;
 use raster::{HostGBuffer, Rasterizer, camera_matrices};
 use support::assert_masks_match_oracle;
 use support::gpu::{ctx, embedded, variants};
@@ -124,8 +125,8 @@ fn embedded_frame_into(
     ctx.queue.submit([encoder.finish()]);
     let pixels = u64::from(w * h);
     Embedded {
-        gbuffer: read_buffer(ctx, &targets.gbuffer, 0..pixels * 64).unwrap(),
-        masks: read_buffer(ctx, &targets.masks, 0..pixels * 4).unwrap(),
+        gbuffer: read_buffer(ctx, &targets.pixels.gbuffer, 0..pixels * 64).unwrap(),
+        masks: read_buffer(ctx, &targets.pixels.masks, 0..pixels * 4).unwrap(),
         unfiltered: read_r32f(ctx, &targets.unfiltered),
         filtered: read_r32f(ctx, &targets.filtered),
         unfinished: targets.unfinished_tiles(ctx).unwrap(),

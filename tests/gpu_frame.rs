@@ -12,15 +12,18 @@ use std::time::Instant;
 
 use glam::{Vec2, Vec3};
 use penumbra::bvh::{Bvh, BvhSettings};
-use penumbra::filter::{FilterParams, discontinuity_filter};
-use penumbra::frame::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
+use penumbra::contract::filter::FilterParams;
+use penumbra::contract::layout::{GBufferTexel, ShadowParams};
 use penumbra::gpu::{Frame, FrameSettings, GpuScene, LeafMode, Renderer, RendererOptions, Tracer};
-use penumbra::layout::{GBufferTexel, ShadowParams};
-use penumbra::reference::mft::{Counters, Frustum, TileOptions, mft_masks_with, trace_tile_with};
+use penumbra::pass_inputs::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
+use penumbra::reference::filter::discontinuity_filter;
 use penumbra::reference::primary::primary_gbuffer;
-use penumbra::reference::shadow::{ITERATION_BUDGET, MASK_FULL, MASK_SKY, per_ray_masks, shadow_params};
+use penumbra::reference::shadow_mft::{Counters, Frustum, TileOptions, mft_masks_with, trace_tile_with};
+use penumbra::reference::shadow_per_ray::{
+    ITERATION_BUDGET, MASK_FULL, MASK_SKY, per_ray_masks, shadow_params,
+};
 use penumbra::scene::Scene;
-use penumbra::view::{Camera, QuadLight, View};
+use penumbra::scene::view::{Camera, QuadLight, View};
 use penumbra::{assets, sampling};
 use support::gpu::{assert_same_rays, ctx, embedded, variants};
 use support::{
@@ -837,7 +840,7 @@ fn visibility_image(scene: &Scene, view: &View, tracer: Tracer, origin: Option<V
     frame
         .masks
         .iter()
-        .map(|&m| penumbra::reference::shadow::visibility(m))
+        .map(|&m| penumbra::reference::shadow_per_ray::visibility(m))
         .collect()
 }
 

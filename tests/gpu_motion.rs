@@ -9,12 +9,12 @@ mod support;
 use glam::{Mat4, Quat, Vec3};
 use penumbra::Error;
 use penumbra::bvh::{Bvh, BvhSettings};
-use penumbra::frame::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
+use penumbra::contract::layout::GBufferTexel;
 use penumbra::gpu::{FrameSettings, GpuScene, MotionSettings, Renderer};
-use penumbra::layout::GBufferTexel;
+use penumbra::pass_inputs::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
 use penumbra::reference::primary::primary_gbuffer;
 use penumbra::scene::Scene;
-use penumbra::view::View;
+use penumbra::scene::view::View;
 use support::assert_masks_match_oracle;
 use support::gpu::{ctx, embedded};
 

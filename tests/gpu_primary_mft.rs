@@ -11,17 +11,17 @@ mod support;
 
 use glam::Vec3;
 use penumbra::bvh::{Bvh, BvhSettings};
-use penumbra::counters::Counters;
-use penumbra::frame::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
+use penumbra::contract::counters::Counters;
+use penumbra::contract::layout::{CameraParams, GBufferTexel};
 use penumbra::gpu::{
     FrameSettings, GpuScene, PrimaryPass, PrimaryTracer, Renderer, RendererOptions, VectorVariant,
     empty_storage_buffer, read_buffer,
 };
-use penumbra::layout::{CameraParams, GBufferTexel};
+use penumbra::pass_inputs::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
 use penumbra::reference::primary::primary_gbuffer_counted;
 use penumbra::reference::primary_mft::{ITERATION_BUDGET, primary_mft_gbuffer};
 use penumbra::scene::Scene;
-use penumbra::view::Camera;
+use penumbra::scene::view::Camera;
 use support::gpu::{ctx, embedded, variants};
 use support::{Rng, near_miss_column, random_soup, scene_from_triangles};
 
@@ -398,7 +398,8 @@ fn running_out_of_iterations_is_an_error() {
             &status,
             groups,
             None,
-        );
+        )
+        .unwrap();
         ctx().queue.submit([encoder.finish()]);
         let reported = pass.read_status(ctx(), &status).unwrap();
         assert_eq!(

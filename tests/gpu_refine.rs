@@ -10,15 +10,16 @@ use std::time::Instant;
 
 use penumbra::assets;
 use penumbra::bvh::{Bvh, BvhSettings};
-use penumbra::filter::{FilterParams, discontinuity_filter};
+use penumbra::contract::filter::FilterParams;
 use penumbra::gpu::{Frame, FrameSettings, GpuScene, Renderer, RendererOptions, Tracer};
-use penumbra::metrics::ImageMetrics;
+use penumbra::quality::metrics::ImageMetrics;
 use penumbra::reference::exact::exact_visibility_image;
+use penumbra::reference::filter::discontinuity_filter;
 use penumbra::reference::refine::refine_image;
 use penumbra::reference::shade::shade_params;
-use penumbra::reference::shadow::{MASK_SKY, shadow_params};
+use penumbra::reference::shadow_per_ray::{MASK_SKY, shadow_params};
 use penumbra::sampling;
-use penumbra::view::View;
+use penumbra::scene::view::View;
 use support::gpu::{ctx, embedded};
 
 /// A frame with the refinement and the G-buffer.

@@ -11,7 +11,7 @@ use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::gpu::{
     FrameSettings, GpuScene, LeafMode, Renderer, RendererOptions, ShadowTracer, TracerOptions,
 };
-use penumbra::reference::shadow::{ITERATION_BUDGET, shadow_params};
+use penumbra::reference::shadow_per_ray::{ITERATION_BUDGET, shadow_params};
 use support::assert_masks_match_oracle;
 use support::gpu::{assert_same_rays, ctx, embedded, trace_masks, variants};
 

@@ -4,8 +4,8 @@
 //! With no adapter these tests fail with the error's advice; they never pass silently.
 
 use penumbra::Error;
+use penumbra::contract::layout::BvhNode;
 use penumbra::gpu::{GpuContext, GpuOptions, GpuTimer, empty_storage_buffer, read_buffer, storage_buffer};
-use penumbra::layout::BvhNode;
 use penumbra::shaders;
 
 use glam::Vec3;

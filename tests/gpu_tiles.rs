@@ -33,7 +33,8 @@ fn tiled_frames_equal_one_piece_frames() {
             settings.max_tile = Some(tile);
             let mut calls = 0;
             let tiled = renderer
-                .render_with_progress(ctx(), &gpu_scene, &view, &settings, &mut |done, total| {
+                .render_with_progress(ctx(), &gpu_scene, &view, &settings, &mut |phase, done, total| {
+                    assert_eq!(phase, penumbra::gpu::Phase::Shadow);
                     calls += 1;
                     assert!(done <= total);
                 })

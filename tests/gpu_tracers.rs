@@ -6,17 +6,17 @@ mod support;
 
 use glam::Vec3;
 use penumbra::bvh::{Bvh, BvhSettings};
+use penumbra::contract::layout::GBufferTexel;
 use penumbra::gpu::{
     FrameSettings, GpuScene, LeafMode, Renderer, RendererOptions, ShadowTracer, Tracer, TracerOptions,
     VectorVariant,
 };
-use penumbra::layout::GBufferTexel;
 use penumbra::reference::counters::Counters;
-use penumbra::reference::mft::{TileOptions, mft_masks, mft_masks_with_options};
-use penumbra::reference::packet::packet_masks;
-use penumbra::reference::shadow::{ITERATION_BUDGET, MASK_FULL, reference_counts, shadow_params};
+use penumbra::reference::shadow_mft::{TileOptions, mft_masks, mft_masks_with_options};
+use penumbra::reference::shadow_packet::packet_masks;
+use penumbra::reference::shadow_per_ray::{ITERATION_BUDGET, MASK_FULL, reference_counts, shadow_params};
 use penumbra::scene::Scene;
-use penumbra::view::{QuadLight, View};
+use penumbra::scene::view::{QuadLight, View};
 use penumbra::{assets, sampling};
 use support::gpu::{
     assert_same_rays, ctx, embedded, exact_arithmetic, trace_masks, try_trace_masks, variants,
@@ -401,7 +401,7 @@ fn a_loop_the_driver_ends_is_an_error_never_wrong_masks() {
         let scene = scene_from_triangles(&near_miss_column(200_000, blocker_y), &[[0.8; 3], [0.3; 3]]);
         let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
         let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
-        let oracle = penumbra::reference::shadow::per_ray_masks(&bvh, &texels, &points, &params);
+        let oracle = penumbra::reference::shadow_per_ray::per_ray_masks(&bvh, &texels, &points, &params);
         assert!(
             oracle.iter().all(|&m| m == MASK_FULL),
             "blocker at {blocker_y}: the blocker must block every ray: {oracle:x?}"
@@ -444,7 +444,7 @@ fn a_closed_room_lit_from_outside_is_dark_for_every_tracer() {
     let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
     let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
     let view = View {
-        camera: penumbra::view::Camera {
+        camera: penumbra::scene::view::Camera {
             eye: centre + Vec3::new(0.1, -0.2, 0.3),
             target: centre + Vec3::new(2.0, 1.0, -1.5),
             up: Vec3::Y,
@@ -491,13 +491,13 @@ fn a_closed_room_lit_from_outside_is_dark_for_every_tracer() {
 }
 
 /// A tile that runs out of its budget saves what the CPU twin saves, word for word
-/// ([`penumbra::reference::mft::dispatch_tile`]): the state of its traversal (node,
+/// ([`penumbra::reference::shadow_mft::dispatch_tile`]): the state of its traversal (node,
 /// masks, cursor, pending leaf, stack), every lane's mask and shrunk rectangle. Checked
 /// after one dispatch of the embedded recording path, whose scratch the test can read.
 #[test]
 fn a_suspended_tile_saves_the_state_the_twin_saves() {
     use penumbra::gpu::ShadowScratch;
-    use penumbra::reference::mft::{
+    use penumbra::reference::shadow_mft::{
         Frustum, STATE_WORDS, STATUS_SUSPENDED, TileOptions, TileRun, dispatch_tile,
     };
     let (w, h) = (24, 20);
@@ -524,17 +524,21 @@ fn a_suspended_tile_saves_the_state_the_twin_saves() {
             let pass = ShadowTracer::with_options(ctx(), &options).unwrap();
             let scratch = ShadowScratch::new(&ctx().device, w, h);
             let mut encoder = ctx().device.create_command_encoder(&Default::default());
+            let image = penumbra::gpu::ShadowImage {
+                gbuffer: &gbuffer,
+                light_points: &light_points,
+                masks: &masks,
+            };
             pass.record(
                 &ctx().device,
                 &mut encoder,
                 &gpu_scene,
-                &gbuffer,
-                &light_points,
-                &masks,
+                &image,
                 &scratch,
                 &params,
                 0,
-            );
+            )
+            .unwrap();
             ctx().queue.submit([encoder.finish()]);
             let bytes = u64::from(tiles_x * tiles_y) * STATE_WORDS as u64 * 4;
             let state: Vec<u32> = penumbra::gpu::read_buffer(ctx(), &scratch.state, 0..bytes).unwrap();

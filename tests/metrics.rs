@@ -1,6 +1,6 @@
 //! Image error metrics against values worked out by hand.
 
-use penumbra::metrics::{Channel, ImageMetrics, difference_image, false_colour, pixel_differences};
+use penumbra::quality::metrics::{Channel, ImageMetrics, difference_image, false_colour, pixel_differences};
 
 fn close(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-12 * b.abs().max(1.0)

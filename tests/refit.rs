@@ -6,7 +6,7 @@ mod support;
 
 use glam::{Mat4, Quat, Vec3};
 use penumbra::bvh::{Bvh, BvhSettings, MERGE_GAP_BYTES};
-use penumbra::layout::BvhNode;
+use penumbra::contract::layout::BvhNode;
 use support::bvh::{check_queries, check_structure, random_rays};
 use support::{Rng, random_soup};
 

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use penumbra::bvh::{Bvh, BvhSettings};
-use penumbra::frame::{ShadingData, texture_dimensions};
+use penumbra::pass_inputs::{ShadingData, texture_dimensions};
 use penumbra::scene::Scene;
 use penumbra::{Error, assets};
 use serde_json::{Value, json};

@@ -8,14 +8,14 @@ use std::path::Path;
 
 use glam::Vec3;
 use penumbra::bvh::{Bvh, BvhSettings};
-use penumbra::frame::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
-use penumbra::reference::mft::{Counters, mft_masks, mft_masks_with};
-use penumbra::reference::mft::{TileOptions, mft_masks_with_options};
-use penumbra::reference::packet::packet_masks;
+use penumbra::pass_inputs::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
 use penumbra::reference::primary::primary_gbuffer;
-use penumbra::reference::shadow::{ITERATION_BUDGET, shadow_params};
-use penumbra::reference::shadow::{MASK_FULL, per_ray_masks};
-use penumbra::view::{Camera, QuadLight, View};
+use penumbra::reference::shadow_mft::{Counters, mft_masks, mft_masks_with};
+use penumbra::reference::shadow_mft::{TileOptions, mft_masks_with_options};
+use penumbra::reference::shadow_packet::packet_masks;
+use penumbra::reference::shadow_per_ray::{ITERATION_BUDGET, shadow_params};
+use penumbra::reference::shadow_per_ray::{MASK_FULL, per_ray_masks};
+use penumbra::scene::view::{Camera, QuadLight, View};
 use penumbra::{assets, sampling, scene::Scene};
 use support::{assert_masks_match_oracle, closed_room, rays_through_a_shared_edge, scene_from_triangles};
 
@@ -25,8 +25,8 @@ struct Case {
     scene: Scene,
     view: View,
     bvh: Bvh,
-    gbuffer: Vec<penumbra::layout::GBufferTexel>,
-    params: penumbra::layout::ShadowParams,
+    gbuffer: Vec<penumbra::contract::layout::GBufferTexel>,
+    params: penumbra::contract::layout::ShadowParams,
     points: Vec<Vec3>,
 }
 
@@ -189,7 +189,7 @@ fn the_oracle_comparison_does_not_excuse_a_ray_for_its_own_surface() {
     // all at (0.3, 0.6), far from every edge: one wrong ray of 65,536 is under 0.1 %.
     let own = bvh.triangles.iter().position(|t| t.scene_index == 0).unwrap() as u32;
     let (w, h) = (64u32, 64u32);
-    let texel = penumbra::layout::GBufferTexel {
+    let texel = penumbra::contract::layout::GBufferTexel {
         origin: Vec3::new(0.3, 0.9e-4 * diag, 0.6),
         depth: 3.0,
         normal: Vec3::Y,

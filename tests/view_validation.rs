@@ -6,11 +6,11 @@ use std::path::Path;
 
 use glam::{Vec2, Vec3};
 use penumbra::bvh::{Bvh, BvhSettings};
-use penumbra::frame::camera_params;
+use penumbra::pass_inputs::camera_params;
 use penumbra::reference::shade::shade_params;
+use penumbra::scene::view::{Camera, QuadLight, View};
+use penumbra::scene::view_checks::{ViewWarning, view_warnings};
 use penumbra::scene::{Instance, LoadWarnings, Material, Scene, SceneTriangle};
-use penumbra::view::{Camera, QuadLight, View};
-use penumbra::view_checks::{ViewWarning, view_warnings};
 use penumbra::{Error, sampling};
 
 /// An ordinary view: looking at the origin from +z, a 1×1 light above facing down.
@@ -226,7 +226,7 @@ fn validated_views_give_finite_camera_and_light_data() {
     v.camera.fov_y_degrees = 179.999;
     views.push(v);
     let mut v = good();
-    v.camera.fov_y_degrees = penumbra::view::MIN_FOV_Y_DEGREES;
+    v.camera.fov_y_degrees = penumbra::scene::view::MIN_FOV_Y_DEGREES;
     v.camera.up = Vec3::new(1e30, 1e30, 0.0);
     views.push(v);
     let mut v = good();

@@ -22,7 +22,7 @@ use penumbra::gpu::{
 };
 use penumbra::output::{HdrImage, ToneMap, write_image};
 use penumbra::scene::Scene;
-use penumbra::{assets, view::QuadLight};
+use penumbra::{assets, scene::view::QuadLight};
 use raster::{HostGBuffer, Rasterizer, camera_matrices};
 use wgpu::util::DeviceExt;
 

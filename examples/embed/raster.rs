@@ -4,7 +4,7 @@
 
 use glam::{Mat4, Vec3};
 use penumbra::scene::Scene;
-use penumbra::view::Camera;
+use penumbra::scene::view::Camera;
 use wgpu::util::DeviceExt;
 
 /// Depth format of the G-buffer (full precision: the shadow pass unprojects it).

@@ -7,11 +7,11 @@
 use std::path::Path;
 
 use libfuzzer_sys::fuzz_target;
-use penumbra::frame::camera_params;
+use penumbra::pass_inputs::camera_params;
 use penumbra::reference::shade::shade_params;
-use penumbra::reference::shadow::shadow_params;
+use penumbra::reference::shadow_per_ray::shadow_params;
 use penumbra::sampling::light_points;
-use penumbra::view::View;
+use penumbra::scene::view::View;
 
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else {

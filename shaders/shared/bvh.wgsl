@@ -1,5 +1,5 @@
 // The flattened BVH as the GPU reads it: 32-byte nodes and 48-byte triangles.
-// Mirrors `src/layout.rs` (BvhNode, BvhTriangle); a naga test checks sizes and offsets.
+// Mirrors `src/contract/layout.rs` (BvhNode, BvhTriangle); a naga test checks sizes and offsets.
 
 // One BVH node, 32 bytes. Inner node (count == 0): its children are nodes
 // `first` and `first + 1`, so one 64-byte read brings both child boxes.

@@ -1,7 +1,7 @@
 // BVH reads of the 16-wide kernels (shadow_mft, shadow_packet, primary_mft), where every
 // lane of a vector reads the same node or triangle. The kernel binds the nodes and the
 // triangles (bindings 1 and 2, the buffers every kernel gets) as arrays of u32,
-// `node_words` and `triangle_words`, in the layouts of shared/bvh.
+// `nodes` and `triangles`, in the layouts of shared/bvh.
 //
 // Why: lavapipe (Mesa 22.3) cannot see that such an address is the same in every lane,
 // so it runs each load as a loop over the 16 lanes, and those loops were most of the
@@ -16,8 +16,8 @@ const TRIANGLE_WORDS: u32 = 12u;
 fn node_from_memory(n: u32) -> BvhNode {
     let b = n * NODE_WORDS;
     return node_of_words(
-        node_words[b], node_words[b + 1u], node_words[b + 2u], node_words[b + 3u],
-        node_words[b + 4u], node_words[b + 5u], node_words[b + 6u], node_words[b + 7u],
+        nodes[b], nodes[b + 1u], nodes[b + 2u], nodes[b + 3u],
+        nodes[b + 4u], nodes[b + 5u], nodes[b + 6u], nodes[b + 7u],
     );
 }
 
@@ -25,16 +25,16 @@ fn node_from_memory(n: u32) -> BvhNode {
 fn triangle_from_memory(t: u32) -> BvhTriangle {
     let b = t * TRIANGLE_WORDS;
     return triangle_of_words(
-        triangle_words[b], triangle_words[b + 1u], triangle_words[b + 2u], triangle_words[b + 3u],
-        triangle_words[b + 4u], triangle_words[b + 5u], triangle_words[b + 6u], triangle_words[b + 7u],
-        triangle_words[b + 8u], triangle_words[b + 9u], triangle_words[b + 10u], triangle_words[b + 11u],
+        triangles[b], triangles[b + 1u], triangles[b + 2u], triangles[b + 3u],
+        triangles[b + 4u], triangles[b + 5u], triangles[b + 6u], triangles[b + 7u],
+        triangles[b + 8u], triangles[b + 9u], triangles[b + 10u], triangles[b + 11u],
     );
 }
 
 // Node `n`; every lane of the vector must call this with the same `n`.
 fn load_node(n: u32) -> BvhNode {
     if VEC16_LANE_WORDS {
-        let w = vec16_words(node_words[n * NODE_WORDS + (g_lane & 7u)]);
+        let w = vec16_words(nodes[n * NODE_WORDS + (g_lane & 7u)]);
         return node_of_words(w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]);
     }
     return node_from_memory(n);
@@ -44,7 +44,7 @@ fn load_node(n: u32) -> BvhNode {
 // lane of the vector must call this with the same `l`.
 fn load_node_pair(l: u32) -> array<BvhNode, 2> {
     if VEC16_LANE_WORDS {
-        let w = vec16_words(node_words[l * NODE_WORDS + g_lane]);
+        let w = vec16_words(nodes[l * NODE_WORDS + g_lane]);
         return array<BvhNode, 2>(
             node_of_words(w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]),
             node_of_words(w[8], w[9], w[10], w[11], w[12], w[13], w[14], w[15]),
@@ -57,7 +57,7 @@ fn load_node_pair(l: u32) -> array<BvhNode, 2> {
 // this with the same `t`.
 fn load_triangle(t: u32) -> BvhTriangle {
     if VEC16_LANE_WORDS {
-        let w = vec16_words(triangle_words[t * TRIANGLE_WORDS + min(g_lane, 11u)]);
+        let w = vec16_words(triangles[t * TRIANGLE_WORDS + min(g_lane, 11u)]);
         return triangle_of_words(w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7], w[8], w[9], w[10], w[11]);
     }
     return triangle_from_memory(t);

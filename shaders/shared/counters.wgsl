@@ -1,5 +1,5 @@
 // The status-buffer words of the Table 1 work counters, and the switch that turns counting on.
-// Imported by the tracing kernels; mirrors src/counters.rs (word layout) and is read back by the host.
+// Imported by the tracing kernels; mirrors src/contract/counters.rs (word layout) and is read back by the host.
 
 // Counting is compiled in only when the pipeline sets COUNTERS = true: with
 // false, every count is dead code. Counts are kept in private variables and

@@ -3,7 +3,7 @@
 // both see the same window; they declare `filter_params`, `values`, `depth` and `normal`.
 // CPU twin: `penumbra::filter::paired_taps`.
 
-// Mirrors `FilterParams` in `src/filter.rs`, 32 bytes; a naga test checks size and offsets.
+// Mirrors `FilterParams` in `src/reference/filter.rs`, 32 bytes; a naga test checks size and offsets.
 struct FilterParams {
     width: u32,             // bytes 0..4: image width in pixels
     height: u32,            // bytes 4..8: image height in pixels

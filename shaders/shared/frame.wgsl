@@ -1,5 +1,5 @@
 // Per-frame structs shared by the primary, shadow and shade passes.
-// Mirrors `src/layout.rs` (GBufferTexel, ShadowParams); a naga test checks sizes and offsets.
+// Mirrors `src/contract/layout.rs` (GBufferTexel, ShadowParams); a naga test checks sizes and offsets.
 
 // One G-buffer pixel, 64 bytes.
 struct GBufferTexel {

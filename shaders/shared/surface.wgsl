@@ -1,5 +1,5 @@
 // A host's rasterized surface turned into a G-buffer texel, for the embedded shadow pass.
-// Mirrors `src/layout.rs` (SurfaceParams, ImageSize); a naga test checks sizes and offsets.
+// Mirrors `src/contract/layout.rs` (SurfaceParams, ImageSize); a naga test checks sizes and offsets.
 
 #import shared/frame
 

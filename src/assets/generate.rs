@@ -23,7 +23,7 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 
 use super::glb_writer::{GlbCamera, GlbScene, Material, Object, Placement, write_glb};
 use super::shapes::{self, TriangleMesh};
-use crate::view::{Camera, QuadLight, View};
+use crate::scene::view::{Camera, QuadLight, View};
 
 /// A generated scene: the bytes of its `.glb` file and its view.
 #[derive(Clone, Debug, PartialEq)]

@@ -9,7 +9,7 @@
 
 use std::path::Path;
 
-use crate::view::View;
+use crate::scene::view::View;
 
 pub mod generate;
 pub mod glb_writer;

@@ -25,7 +25,7 @@ use glam::{Vec3, Vec3A};
 use obvhs::{BvhBuildParams, bvh2::builder::build_bvh2_from_tris, triangle::Triangle};
 
 use super::{BuildQuality, Bvh, BvhSettings};
-use crate::layout::{BvhNode, BvhTriangle};
+use crate::contract::layout::{BvhNode, BvhTriangle};
 use crate::{Error, Result};
 
 fn params(settings: &BvhSettings) -> BvhBuildParams {

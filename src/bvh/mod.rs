@@ -12,7 +12,7 @@ pub use refit::{MERGE_GAP_BYTES, Refit, ranges};
 pub use stats::BvhStats;
 
 use crate::Result;
-use crate::layout::{BvhNode, BvhTriangle};
+use crate::contract::layout::{BvhNode, BvhTriangle};
 use crate::scene::Scene;
 
 /// How much time the builder spends on tree quality (obvhs presets, no spatial splits).

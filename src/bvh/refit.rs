@@ -16,7 +16,7 @@ use std::ops::Range;
 use glam::Vec3;
 
 use super::Bvh;
-use crate::layout::BvhNode;
+use crate::contract::layout::BvhNode;
 
 /// Ranges closer than this many bytes are merged into one upload: a few bytes of
 /// unchanged data cost less than another `write_buffer` call.
@@ -34,7 +34,7 @@ pub struct Refit {
 
 impl Bvh {
     /// Moves the triangles at leaf-order `slots` to their corners in `corners` (indexed by
-    /// [`crate::layout::BvhTriangle::scene_index`], i.e. by scene triangle) and refits:
+    /// [`crate::contract::layout::BvhTriangle::scene_index`], i.e. by scene triangle) and refits:
     /// each leaf above a moved triangle gets the exact bounds of its triangles' corners,
     /// each inner node above it the union of its children's boxes.
     ///
@@ -81,7 +81,10 @@ impl Bvh {
         }
         Refit {
             nodes: ranges(&dirty, MERGE_GAP_BYTES / size_of::<BvhNode>()),
-            triangles: ranges(&moved, MERGE_GAP_BYTES / size_of::<crate::layout::BvhTriangle>()),
+            triangles: ranges(
+                &moved,
+                MERGE_GAP_BYTES / size_of::<crate::contract::layout::BvhTriangle>(),
+            ),
         }
     }
 

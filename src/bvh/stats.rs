@@ -3,7 +3,7 @@
 use std::collections::BTreeMap;
 
 use super::Bvh;
-use crate::layout::BvhNode;
+use crate::contract::layout::BvhNode;
 
 /// Shape and cost figures of a [`Bvh`].
 #[derive(Clone, Debug, PartialEq)]

@@ -5,18 +5,18 @@
 use std::path::{Path, PathBuf};
 
 use penumbra::bvh::{Bvh, BvhSettings};
-use penumbra::frame::{RAY_OFFSET_FRACTION, camera_params};
+use penumbra::contract::layout::GBufferTexel;
 use penumbra::gpu::MotionSettings;
 use penumbra::gpu::animate::{AnimationReport, animate_instance, default_moving_instance};
 use penumbra::gpu::{
     FrameSettings, GpuContext, GpuOptions, GpuScene, GpuTimer, PrimaryPass, PrimaryTracer, Renderer,
     RendererOptions, Tracer, empty_storage_buffer,
 };
-use penumbra::layout::GBufferTexel;
+use penumbra::pass_inputs::{RAY_OFFSET_FRACTION, camera_params};
 use penumbra::reference::counters::Counters;
-use penumbra::reference::shadow::MASK_SKY;
+use penumbra::reference::shadow_per_ray::MASK_SKY;
 use penumbra::scene::Scene;
-use penumbra::view::View;
+use penumbra::scene::view::View;
 use penumbra::{Error, Result, assets};
 use serde::Serialize;
 

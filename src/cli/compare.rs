@@ -3,8 +3,8 @@
 
 use std::path::PathBuf;
 
-use penumbra::metrics::{Channel, ImageMetrics, difference_image, pixel_differences};
 use penumbra::output::{HdrImage, read_rgba_image, write_display_image};
+use penumbra::quality::metrics::{Channel, ImageMetrics, difference_image, pixel_differences};
 use penumbra::{Error, Result};
 
 /// `--channel` values.

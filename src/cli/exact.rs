@@ -5,8 +5,8 @@ use std::time::{Duration, Instant};
 
 use penumbra::Result;
 use penumbra::bvh::Bvh;
-use penumbra::frame::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
 use penumbra::output::{FloatImage, write_float_image};
+use penumbra::pass_inputs::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
 use penumbra::reference::exact::{ExactImageOptions, exact_visibility_image_with};
 use penumbra::reference::primary::primary_gbuffer;
 

@@ -4,8 +4,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use penumbra::bvh::Bvh;
-use penumbra::frame::texture_dimensions;
 use penumbra::gpu::memory;
+use penumbra::pass_inputs::texture_dimensions;
 use penumbra::scene::Scene;
 
 use super::BvhArgs;

@@ -2,19 +2,19 @@
 //! exact answer (beam splitting) on the same G-buffer: MFT 16 spp with and
 //! without the filter, filtered and refined, and the reference tracer at 64 and
 //! 256 rays per pixel;
-//! then where each one's error lies ([`penumbra::error_regions`]).
+//! then where each one's error lies ([`penumbra::quality::error_regions`]).
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use penumbra::bvh::Bvh;
-use penumbra::error_regions::{Region, RegionError, classify_pixels, error_by_region};
-use penumbra::filter::FilterParams;
+use penumbra::contract::filter::FilterParams;
 use penumbra::gpu::{FrameSettings, GpuContext, GpuOptions, GpuScene, Renderer, RendererOptions, Tracer};
-use penumbra::metrics::ImageMetrics;
 use penumbra::output::{FloatImage, write_float_image};
+use penumbra::quality::error_regions::{Region, RegionError, classify_pixels, error_by_region};
+use penumbra::quality::metrics::ImageMetrics;
 use penumbra::reference::exact::{ExactImageOptions, exact_visibility_image_with};
-use penumbra::reference::shadow::MASK_SKY;
+use penumbra::reference::shadow_per_ray::MASK_SKY;
 use penumbra::{Error, Result};
 use serde::Serialize;
 
@@ -38,10 +38,10 @@ pub struct QualityArgs {
     #[arg(long, default_value = "256x256", value_parser = parse_size)]
     size: (u32, u32),
     /// Filter: neighbours whose depth differs by more than this fraction of the pixel's are ignored.
-    #[arg(long, default_value_t = penumbra::filter::FilterParams::DEFAULT_DEPTH_TOLERANCE)]
+    #[arg(long, default_value_t = penumbra::contract::filter::FilterParams::DEFAULT_DEPTH_TOLERANCE)]
     depth_tolerance: f32,
     /// Filter: neighbours whose normal has a smaller dot product with the pixel's are ignored.
-    #[arg(long, default_value_t = penumbra::filter::FilterParams::DEFAULT_NORMAL_TOLERANCE)]
+    #[arg(long, default_value_t = penumbra::contract::filter::FilterParams::DEFAULT_NORMAL_TOLERANCE)]
     normal_tolerance: f32,
     /// Give up on the exact visibility (an error) after this many seconds.
     #[arg(long, default_value_t = 1800.0)]

@@ -4,14 +4,14 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use penumbra::bvh::Bvh;
-use penumbra::filter::FilterParams;
+use penumbra::contract::filter::FilterParams;
 use penumbra::gpu::{
     FrameSettings, GpuContext, GpuOptions, GpuScene, LeafMode, Phase, PrimaryTracer, Renderer,
     RendererOptions, Tracer, VectorVariant,
 };
 use penumbra::output::{FloatImage, HdrImage, ToneMap, write_float_image, write_image};
-use penumbra::reference::shadow::MASK_SKY;
-use penumbra::view_checks::view_warnings;
+use penumbra::reference::shadow_per_ray::MASK_SKY;
+use penumbra::scene::view_checks::view_warnings;
 use penumbra::{Error, Result};
 
 use super::BvhArgs;
@@ -301,7 +301,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let rays_per_pixel = f64::from(tracer.rays_per_pixel());
     let start = Instant::now();
     let frame =
-        renderer.render_with_phases(&ctx, &gpu_scene, &view, &settings, &mut |phase, done, total| {
+        renderer.render_with_progress(&ctx, &gpu_scene, &view, &settings, &mut |phase, done, total| {
             let name = match phase {
                 Phase::Shadow => "shadow",
                 Phase::Refine => "refine",

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use penumbra::view::View;
+use penumbra::scene::view::View;
 use penumbra::{Result, assets, scene::Scene};
 
 /// Loads the scene the argument names: none → the built-in default scene; a
@@ -22,7 +22,7 @@ pub fn load_scene(arg: Option<&Path>) -> Result<Scene> {
 }
 
 /// The view of the built-in scene the argument selects, if it selects one.
-pub fn builtin_view(arg: Option<&Path>) -> Option<penumbra::view::View> {
+pub fn builtin_view(arg: Option<&Path>) -> Option<penumbra::scene::view::View> {
     match arg {
         None => Some(assets::default_scene().view()),
         Some(p) if !p.exists() => p.to_str().and_then(assets::embedded_scene).map(|s| s.view()),

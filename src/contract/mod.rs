@@ -1,9 +1,12 @@
 //! The contract between the GPU passes ([`crate::gpu`]) and their CPU twins
 //! ([`crate::reference`]): the uniform builders and constants a kernel shares with Rust,
 //! one file per kernel family. Both sides take them from here and neither from the other;
-//! the `#[repr(C)]` structs are in [`crate::layout`] and the status words in
-//! [`crate::counters`]. Tests check the WGSL side of each constant with naga.
+//! the `#[repr(C)]` structs are in [`crate::contract::layout`] and the status words in
+//! [`crate::contract::counters`]. Tests check the WGSL side of each constant with naga.
 
+pub mod counters;
+pub mod filter;
+pub mod layout;
 pub mod primary;
 pub mod refine;
 pub mod shade;
@@ -55,8 +58,8 @@ pub(crate) mod tests {
             ("STACK_SIZE", super::STACK_SIZE as u32),
             ("MASK_SKY", super::shadow::MASK_SKY),
             ("MASK_FULL", super::shadow::MASK_FULL),
-            ("WORD_LOOP_CUT", crate::counters::WORD_LOOP_CUT as u32),
-            ("WORD_STATUS", crate::counters::WORD_STATUS as u32),
+            ("WORD_LOOP_CUT", crate::contract::counters::WORD_LOOP_CUT as u32),
+            ("WORD_STATUS", crate::contract::counters::WORD_STATUS as u32),
         ];
         let mut checked = 0;
         for &(kernel, variants) in crate::shaders::KERNELS {

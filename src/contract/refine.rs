@@ -1,7 +1,7 @@
 //! What the refinement's selection kernel (`shaders/refine_select.wgsl`) and its twin
 //! ([`crate::reference::refine`]) are given.
 
-use crate::filter::FilterParams;
+use crate::contract::filter::FilterParams;
 
 /// Visibility tolerance of the refinement's window test: one ray of 16. A neighbour on
 /// the same surface whose unfiltered visibility differs by more cuts the window, so the

@@ -1,8 +1,8 @@
 //! What the shade pass (`shaders/shade.wgsl`) and its twin ([`crate::reference::shade`])
 //! read of the light.
 
-use crate::layout::ShadeParams;
-use crate::view::QuadLight;
+use crate::contract::layout::ShadeParams;
+use crate::scene::view::QuadLight;
 
 /// Shade parameters for a light and image size.
 pub fn shade_params(light: &QuadLight, width: u32, height: u32) -> ShadeParams {

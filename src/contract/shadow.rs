@@ -1,10 +1,10 @@
 //! What the shadow kernels (`shaders/shadow_mft.wgsl`, `shadow_packet.wgsl`,
 //! `shadow_per_ray.wgsl`) and their CPU twins agree on besides the structs of
-//! [`crate::layout`]: the shadow ray's extent and mask bits, the parameters a dispatch
+//! [`crate::contract::layout`]: the shadow ray's extent and mask bits, the parameters a dispatch
 //! gets, and the multi-frusta kernel's constants and suspended-state layout.
 
-use crate::layout::ShadowParams;
-use crate::view::QuadLight;
+use crate::contract::layout::ShadowParams;
+use crate::scene::view::QuadLight;
 
 /// Shadow rays end at `t_max = 1 − 2⁻¹²`, just short of the light sample, so
 /// geometry that holds the light (a luminaire's own mesh) does not block it.
@@ -108,7 +108,7 @@ mod tests {
                 ("SHRINK_FLAG", U32(SHRINK_FLAG)),
                 ("SHRINK_MARGIN", F32(SHRINK_MARGIN)),
                 ("BOUNDS_PAD", F32(BOUNDS_PAD)),
-                ("WORD_LOOP_CUT", u(crate::counters::WORD_LOOP_CUT)),
+                ("WORD_LOOP_CUT", u(crate::contract::counters::WORD_LOOP_CUT)),
             ] {
                 assert_eq!(
                     wgsl_constant("shadow_mft", &aliases, name),

@@ -205,37 +205,68 @@ impl Kernel {
         })
     }
 
-    /// A bind group with `buffers[i]` (whole) at binding `i`.
-    pub fn bind(&self, ctx: &GpuContext, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
-        self.bind_on(&ctx.device, buffers)
-    }
-
-    /// [`Kernel::bind`] on a bare device (for passes recorded into a host's encoder).
-    pub fn bind_on(&self, device: &wgpu::Device, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
-        let resources: Vec<wgpu::BindingResource> = buffers.iter().map(|b| b.as_entire_binding()).collect();
-        self.bind_resources(device, resources)
-    }
-
-    /// A bind group with `resources[i]` at binding `i`, for kernels that bind textures.
-    pub fn bind_resources(
+    /// A bind group from `(variable name, resource)` pairs, given in binding order: pair
+    /// `i` must name the kernel's binding `i` ([`Kernel::bindings`]), so a call site reads
+    /// like the shader's declarations and a mismatch is an error naming both sides
+    /// ([`check_binding_names`]), not a wrong buffer bound.
+    pub fn bind(
         &self,
         device: &wgpu::Device,
-        resources: Vec<wgpu::BindingResource<'_>>,
-    ) -> wgpu::BindGroup {
-        let entries: Vec<wgpu::BindGroupEntry> = resources
-            .into_iter()
-            .enumerate()
-            .map(|(i, resource)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource,
+        resources: &[(&str, wgpu::BindingResource<'_>)],
+    ) -> Result<wgpu::BindGroup> {
+        let given: Vec<&str> = resources.iter().map(|(name, _)| *name).collect();
+        check_binding_names(&self.name, &self.bindings, &given).map_err(Error::Gpu)?;
+        let entries: Vec<wgpu::BindGroupEntry> = (0u32..)
+            .zip(resources)
+            .map(|(binding, (_, resource))| wgpu::BindGroupEntry {
+                binding,
+                resource: resource.clone(),
             })
             .collect();
-        device.create_bind_group(&wgpu::BindGroupDescriptor {
+        Ok(device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(&self.name),
             layout: &self.layout,
             entries: &entries,
-        })
+        }))
     }
+}
+
+/// `(name, whole buffer)` for [`Kernel::bind`].
+pub fn buffer<'a>(name: &'a str, buffer: &'a wgpu::Buffer) -> (&'a str, wgpu::BindingResource<'a>) {
+    (name, buffer.as_entire_binding())
+}
+
+/// `(name, texture view)` for [`Kernel::bind`].
+pub fn texture<'a>(name: &'a str, view: &'a wgpu::TextureView) -> (&'a str, wgpu::BindingResource<'a>) {
+    (name, wgpu::BindingResource::TextureView(view))
+}
+
+/// Checks that `given[i]` is the name of `kernel`'s binding `i` for every binding, and
+/// that no binding is missing or extra; the error names the kernel, the binding number and
+/// both names.
+pub fn check_binding_names(
+    kernel: &str,
+    bindings: &[(Binding, String)],
+    given: &[&str],
+) -> std::result::Result<(), String> {
+    for (i, (declared, host)) in bindings.iter().map(|(_, n)| n.as_str()).zip(given).enumerate() {
+        if declared != *host {
+            return Err(format!(
+                "kernel {kernel}: binding {i} is `{declared}` in the shader but `{host}` on the host"
+            ));
+        }
+    }
+    if given.len() != bindings.len() {
+        let declared: Vec<&str> = bindings.iter().map(|(_, n)| n.as_str()).collect();
+        return Err(format!(
+            "kernel {kernel}: the shader declares {} bindings ({}), the host gives {} ({})",
+            bindings.len(),
+            declared.join(", "),
+            given.len(),
+            given.join(", ")
+        ));
+    }
+    Ok(())
 }
 
 impl Kernel {
@@ -328,6 +359,32 @@ mod tests {
             kinds("@group(0) @binding(0) var t: texture_2d<u32>; @compute @workgroup_size(1) fn main() {}")
                 .unwrap_err();
         assert!(err.contains("`t`"), "{err}");
+    }
+
+    /// Names given in binding order pass; a swapped pair, a missing or an extra name
+    /// fails naming the kernel and both sides.
+    #[test]
+    fn binding_names_are_checked_against_the_shader() {
+        let module = naga::front::wgsl::parse_str(
+            "@group(0) @binding(0) var<uniform> params: vec4<u32>;
+             @group(0) @binding(1) var<storage, read_write> masks: array<u32>;
+             @compute @workgroup_size(1) fn main() {}",
+        )
+        .unwrap();
+        let bindings = reflect_bindings(&module).unwrap();
+        assert_eq!(check_binding_names("k", &bindings, &["params", "masks"]), Ok(()));
+        let err = check_binding_names("k", &bindings, &["masks", "params"]).unwrap_err();
+        assert_eq!(
+            err,
+            "kernel k: binding 0 is `params` in the shader but `masks` on the host"
+        );
+        let err = check_binding_names("k", &bindings, &["params"]).unwrap_err();
+        assert!(
+            err.contains("declares 2 bindings (params, masks)") && err.contains("gives 1 (params)"),
+            "{err}"
+        );
+        let err = check_binding_names("k", &bindings, &["params", "masks", "extra"]).unwrap_err();
+        assert!(err.contains("gives 3"), "{err}");
     }
 
     /// Every kernel variant the passes build has a layout the reflection can make.

@@ -7,15 +7,17 @@
 //! largest per-pixel buffer exceeds the adapter's limit for one storage-buffer
 //! binding, and says which image size would fit.
 //!
-//! The sizes mirror the allocations in `scene_buffers.rs`, `render.rs` and
-//! `shadow_pass.rs` (the shadow pass's state buffer: [`SHADOW_STATE_WORDS`]
-//! words per tile of a chunk of at most [`SHADOW_CHUNK_TILES`]² tiles); the
-//! buffer helpers pad every buffer to at least 16 bytes and a multiple of 4.
+//! The per-pixel sizes are the list the frame allocates from
+//! ([`super::pixel_buffers::PIXEL_BUFFERS`]); the scene's mirror `scene_buffers.rs`, the
+//! shadow pass's state buffer `shadow_tracer.rs` ([`SHADOW_STATE_WORDS`] words per tile
+//! of a chunk of at most [`SHADOW_CHUNK_TILES`]² tiles); the buffer helpers pad every
+//! buffer to at least 16 bytes and a multiple of 4.
 //! Uniform buffers, the 4 KiB of light points, status words and timestamp
 //! queries (under 100 KiB together) are not counted.
 
+use super::pixel_buffers::PIXEL_BUFFERS;
 use crate::bvh::Bvh;
-use crate::layout::{BvhNode, BvhTriangle, GBufferTexel, GpuMaterial, GpuTexture, ShadingTriangle};
+use crate::contract::layout::{BvhNode, BvhTriangle, GpuMaterial, GpuTexture, ShadingTriangle};
 use crate::scene::Scene;
 use crate::{Error, Result};
 
@@ -50,7 +52,7 @@ pub struct SceneCounts {
 
 impl SceneCounts {
     /// The counts of `scene` and its `bvh`, with `texels` texels in all its textures
-    /// (see [`crate::frame::texture_dimensions`] to count them without decoding).
+    /// (see [`crate::pass_inputs::texture_dimensions`] to count them without decoding).
     pub fn new(scene: &Scene, bvh: &Bvh, texels: u64) -> SceneCounts {
         SceneCounts {
             nodes: bvh.nodes.len() as u64,
@@ -79,27 +81,16 @@ pub fn scene_buffers(c: &SceneCounts) -> Vec<BufferSize> {
     ]
 }
 
-/// Bytes per pixel of each per-pixel buffer of a frame, as `render.rs` allocates them.
-const PER_PIXEL: [(&str, u64); 7] = [
-    ("G-buffer", size_of::<GBufferTexel>() as u64),
-    ("shadow masks", 4),
-    ("shaded values", 16),
-    ("depth", 4),
-    ("normals", 16),
-    ("filtered values", 16),
-    ("brdf", 16),
-];
-
 /// One `width`×`height` frame's buffers: the per-pixel buffers, the shadow
 /// pass's state for one chunk of tiles, and the largest read-back staging
 /// buffer (one exists at a time; the G-buffer is not read back unless asked).
 pub fn frame_buffers(width: u32, height: u32) -> Vec<BufferSize> {
     let pixels = u64::from(width) * u64::from(height);
-    let mut out: Vec<BufferSize> = PER_PIXEL
+    let mut out: Vec<BufferSize> = PIXEL_BUFFERS
         .iter()
-        .map(|&(label, bpp)| BufferSize {
-            label,
-            bytes: padded(pixels * bpp),
+        .map(|b| BufferSize {
+            label: b.label,
+            bytes: padded(pixels * b.bytes_per_pixel),
         })
         .collect();
     let chunk = |side: u32| SHADOW_CHUNK_TILES.min(u64::from(side.div_ceil(4))).max(1);
@@ -157,7 +148,7 @@ pub fn check_frame_fits(limit: u64, width: u32, height: u32) -> Result<()> {
 /// The largest image with (about) the aspect ratio of `width`×`height` whose
 /// frame buffers each fit in `limit` bytes; at least 1×1.
 pub fn largest_image(limit: u64, width: u32, height: u32) -> (u32, u32) {
-    let bpp = PER_PIXEL.iter().map(|&(_, b)| b).max().unwrap_or(1);
+    let bpp = PIXEL_BUFFERS.iter().map(|b| b.bytes_per_pixel).max().unwrap_or(1);
     let max_pixels = (limit / bpp).max(1);
     let fits = |w: u64, h: u64| w * h <= max_pixels;
     let (w, h) = (u64::from(width.max(1)), u64::from(height.max(1)));

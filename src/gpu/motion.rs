@@ -16,8 +16,8 @@ use glam::{Mat3, Mat4, Vec3, Vec4};
 
 use super::{GpuContext, GpuScene, storage_buffer, validate_for_gpu};
 use crate::bvh::{BuildQuality, Bvh, BvhSettings};
-use crate::frame::ShadingData;
-use crate::layout::{BvhNode, ShadingTriangle};
+use crate::contract::layout::{BvhNode, ShadingTriangle};
+use crate::pass_inputs::ShadingData;
 use crate::scene::Scene;
 use crate::{Error, Result};
 
@@ -262,7 +262,7 @@ impl GpuScene {
         for r in tri_ranges {
             write(
                 &self.triangles,
-                r.start * size_of::<crate::layout::BvhTriangle>(),
+                r.start * size_of::<crate::contract::layout::BvhTriangle>(),
                 bytemuck::cast_slice(&super::scene_buffers::triangles_from(
                     &bvh.triangles[r.clone()],
                     self.origin,

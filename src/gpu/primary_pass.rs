@@ -14,12 +14,12 @@
 //! ends any other way (the driver ended it: a budget above its limit) is counted
 //! in status word [`WORD_LOOP_CUT`] and is an [`Error::LoopCut`].
 
-use super::kernel::{Checks, Kernel, uniform_buffer};
+use super::kernel::{Checks, Kernel, buffer, uniform_buffer};
 use super::{GpuContext, GpuScene, GpuTimer, VectorVariant, read_buffer};
 use crate::contract::ITERATION_BUDGET;
+use crate::contract::counters::{Counters, STATUS_WORDS, WORD_LOOP_CUT, WORD_STATUS};
+use crate::contract::layout::CameraParams;
 use crate::contract::primary::BLOCK;
-use crate::counters::{Counters, STATUS_WORDS, WORD_LOOP_CUT, WORD_STATUS};
-use crate::layout::CameraParams;
 use crate::{Error, Result};
 
 /// Which kernel traces the camera rays.
@@ -139,11 +139,7 @@ impl PrimaryPass {
                 if variant == VectorVariant::Subgroup {
                     constants.push(("VEC16_PER_WG", f64::from(per_wg)));
                 }
-                let aliases: &[(&str, &str)] = match variant {
-                    VectorVariant::Subgroup => &[("shared/vec16", "shared/vec16_subgroup")],
-                    VectorVariant::Workgroup => &[("shared/vec16", "shared/vec16_workgroup")],
-                };
-                ("primary_mft", aliases, Some(variant), per_wg)
+                ("primary_mft", variant.aliases(), Some(variant), per_wg)
             }
         };
         let kernel = Kernel::new(
@@ -226,24 +222,25 @@ impl PrimaryPass {
         status: &wgpu::Buffer,
         groups: (u32, u32),
         timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
-    ) {
+    ) -> Result<()> {
         encoder.clear_buffer(status, 0, None);
-        let bind = self.kernel.bind_on(
+        let bind = self.kernel.bind(
             device,
             &[
-                camera,
-                &scene.nodes,
-                &scene.triangles,
-                &scene.shading,
-                &scene.materials,
-                gbuffer,
-                status,
-                &scene.textures,
-                &scene.texels,
+                buffer("camera", camera),
+                buffer("nodes", &scene.nodes),
+                buffer("triangles", &scene.triangles),
+                buffer("shading", &scene.shading),
+                buffer("materials", &scene.materials),
+                buffer("gbuffer", gbuffer),
+                buffer("status", status),
+                buffer("textures", &scene.textures),
+                buffer("texels", &scene.texels),
             ],
-        );
+        )?;
         self.kernel
             .record(encoder, "primary", &bind, timestamp_writes, groups);
+        Ok(())
     }
 
     /// Reads a status buffer back after the pass was submitted.
@@ -286,7 +283,8 @@ impl PrimaryPass {
         timer: Option<&mut GpuTimer>,
     ) -> Result<PrimaryStatus> {
         let pixels = u64::from(camera.width) * u64::from(camera.height);
-        if pixels == 0 || gbuffer.size() < pixels * size_of::<crate::layout::GBufferTexel>() as u64 {
+        if pixels == 0 || gbuffer.size() < pixels * size_of::<crate::contract::layout::GBufferTexel>() as u64
+        {
             return Err(Error::Gpu(format!(
                 "primary pass: a {}x{} image needs a G-buffer of {} texels, got {} bytes",
                 camera.width,
@@ -310,7 +308,7 @@ impl PrimaryPass {
             &status,
             groups,
             writes,
-        );
+        )?;
         if let Some(t) = timer {
             t.resolve(&mut encoder);
         }

@@ -12,10 +12,10 @@
 //! kernel then traces a pixel's 256 rays as one vector of 16 frusta that share their
 //! origin, and its masks are the oracle's, as for every frame.
 
-use super::kernel::{Checks, Kernel, uniform_buffer};
-use super::shadow_tracer::ShadowTracer;
-use super::{GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer};
-use crate::layout::{GBufferTexel, RefineParams, ShadowParams};
+use super::kernel::{Checks, Kernel, buffer, uniform_buffer};
+use super::pixel_buffers::PixelBuffers;
+use super::{GpuContext, GpuScene, GpuTimer, ShadowImage, ShadowTracer, empty_storage_buffer, read_buffer};
+use crate::contract::layout::{GBufferTexel, RefineParams, ShadowParams};
 use crate::sampling::SETS;
 use crate::{Error, Result};
 
@@ -29,24 +29,17 @@ pub struct RefineBuffers<'a> {
     /// Width and height of the frame in pixels.
     pub size: (u32, u32),
     /// `FilterParams` uniform for `refine_select`: the filter's, with the refinement's
-    /// visibility tolerance ([`crate::reference::refine::selection_params`]).
+    /// visibility tolerance ([`crate::contract::refine::selection_params`]).
     pub selection_params: &'a wgpu::Buffer,
     /// The frame's `ShadowParams` (light, `t_max`, budget); its size fields are replaced.
     pub shadow_params: &'a ShadowParams,
     /// `ShadeParams` uniform of the frame's shade pass.
     pub shade_params: &'a wgpu::Buffer,
-    /// The shade pass's outputs, the filter's inputs.
-    pub values: &'a wgpu::Buffer,
-    /// Eye distance per pixel (0: no hit).
-    pub depth: &'a wgpu::Buffer,
-    /// Shading normal per pixel (vec4).
-    pub normal: &'a wgpu::Buffer,
-    /// The G-buffer.
-    pub gbuffer: &'a wgpu::Buffer,
+    /// The frame's per-pixel buffers: the shade pass's outputs and the G-buffer are read,
+    /// `filtered` is overwritten at the refined pixels.
+    pub pixels: &'a PixelBuffers,
     /// The 256 interleaved light points, set order.
     pub light_points: &'a wgpu::Buffer,
-    /// The filter's output, overwritten at the refined pixels.
-    pub filtered: &'a wgpu::Buffer,
 }
 
 /// The refinement's three pipelines (the tracer is the frame's).
@@ -87,9 +80,17 @@ impl Refinement {
         let list = empty_storage_buffer(ctx, "refine list", (2 + pixels) * 4, rw)?;
 
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        let bind = self
-            .select
-            .bind(ctx, &[b.selection_params, b.values, b.depth, b.normal, &list]);
+        let p = b.pixels;
+        let bind = self.select.bind(
+            &ctx.device,
+            &[
+                buffer("filter_params", b.selection_params),
+                buffer("values", &p.values),
+                buffer("depth", &p.depth),
+                buffer("normal", &p.normal),
+                buffer("list", &list),
+            ],
+        )?;
         let writes = timer.pass_writes("refine");
         let groups = (width.div_ceil(8), height.div_ceil(8));
         self.select
@@ -148,7 +149,15 @@ impl Refinement {
         let params_buf = uniform_buffer(ctx, "refine params", params);
 
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        let bind = self.gather.bind(ctx, &[&params_buf, b.gbuffer, list, &samples]);
+        let bind = self.gather.bind(
+            &ctx.device,
+            &[
+                buffer("params", &params_buf),
+                buffer("gbuffer", &b.pixels.gbuffer),
+                buffer("list", list),
+                buffer("samples", &samples),
+            ],
+        )?;
         let writes = timer.pass_writes("refine");
         let groups = (w.div_ceil(8), h.div_ceil(8));
         self.gather
@@ -162,23 +171,25 @@ impl Refinement {
             tiles_y: h.div_ceil(4),
             ..*b.shadow_params
         };
-        tracer.run_timed_as(
-            ctx,
-            scene,
-            &samples,
-            b.light_points,
-            &masks,
-            &shadow,
-            Some(timer),
-            "refine",
-            progress,
-        )?;
+        let image = ShadowImage {
+            gbuffer: &samples,
+            light_points: b.light_points,
+            masks: &masks,
+        };
+        tracer.run(ctx, scene, &image, &shadow, Some(timer), "refine", progress)?;
 
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         let bind = self.resolve.bind(
-            ctx,
-            &[&params_buf, b.shade_params, b.gbuffer, list, &masks, b.filtered],
-        );
+            &ctx.device,
+            &[
+                buffer("params", &params_buf),
+                buffer("shade", b.shade_params),
+                buffer("gbuffer", &b.pixels.gbuffer),
+                buffer("list", list),
+                buffer("sample_masks", &masks),
+                buffer("filtered", &b.pixels.filtered),
+            ],
+        )?;
         let writes = timer.pass_writes("refine");
         self.resolve.record(
             &mut encoder,

@@ -8,8 +8,8 @@ use glam::Vec3;
 use super::{GpuContext, storage_buffer};
 use crate::bvh::Bvh;
 use crate::contract::STACK_SIZE;
-use crate::frame::ShadingData;
-use crate::layout::{BvhNode, BvhTriangle};
+use crate::contract::layout::{BvhNode, BvhTriangle};
+use crate::pass_inputs::ShadingData;
 use crate::scene::Scene;
 use crate::{Error, Result};
 

@@ -9,12 +9,11 @@
 //! A loop that ends any other way (a budget above the driver's limit) is counted
 //! in the status word [`WORD_LOOP_CUT`] and the pass fails with [`Error::LoopCut`].
 
-use super::kernel::{Checks, Kernel, uniform_buffer, uniform_buffer_on};
-pub use super::tracer::Tracer;
-use super::{AdapterSummary, GpuContext, GpuScene, GpuTimer, empty_storage_buffer, read_buffer};
-use crate::counters::{Counters, STATUS_WORDS};
-use crate::counters::{WORD_LOOP_CUT, WORD_STATUS};
-use crate::layout::ShadowParams;
+use super::kernel::{Checks, Kernel, buffer, uniform_buffer_on};
+use super::{GpuContext, GpuScene, GpuTimer, LeafMode, Tracer, TracerOptions, VectorVariant, read_buffer};
+use crate::contract::counters::{Counters, STATUS_WORDS};
+use crate::contract::counters::{WORD_LOOP_CUT, WORD_STATUS};
+use crate::contract::layout::ShadowParams;
 use crate::{Error, Result};
 
 /// 32-bit words of one tile's suspended state ([`crate::contract::shadow::STATE_WORDS`];
@@ -29,102 +28,6 @@ pub const UNFINISHED_WORDS: u64 = 2;
 /// Resume rounds after which the pass gives up (a bug, not a scene, could cause it).
 const MAX_ROUNDS: u32 = 10_000;
 
-/// How the kernel's 16-wide vector is built from invocations (DESIGN.md).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum VectorVariant {
-    /// 16 lanes of a subgroup; needs subgroups of a fixed size that is a multiple of 16.
-    Subgroup,
-    /// A 16-invocation workgroup exchanging through workgroup memory; works everywhere.
-    Workgroup,
-}
-
-impl std::fmt::Display for VectorVariant {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            VectorVariant::Subgroup => "subgroup",
-            VectorVariant::Workgroup => "workgroup",
-        })
-    }
-}
-
-impl VectorVariant {
-    /// The variant for an adapter: `forced` if given (an error when the adapter cannot run it),
-    /// else subgroups when they are a fixed multiple of 16 wide, else workgroups.
-    /// Returns the variant and the number of vectors per workgroup.
-    pub fn choose(info: &AdapterSummary, forced: Option<VectorVariant>) -> Result<(VectorVariant, u32)> {
-        let size = info.subgroup_min_size;
-        let subgroup_ok = info.has_subgroups
-            && info.subgroup_min_size == info.subgroup_max_size
-            && size.is_multiple_of(16)
-            && (16..=64).contains(&size);
-        match forced {
-            Some(VectorVariant::Workgroup) => Ok((VectorVariant::Workgroup, 1)),
-            Some(VectorVariant::Subgroup) if !subgroup_ok => Err(Error::Gpu(format!(
-                "the subgroup vector needs subgroups of one fixed size that is a multiple of 16; \
-                 {} has {}subgroups of {}..{} lanes (on lavapipe set LP_NATIVE_VECTOR_WIDTH=512 \
-                 for 16-wide subgroups, or use --vector workgroup)",
-                info.name,
-                if info.has_subgroups { "" } else { "no " },
-                info.subgroup_min_size,
-                info.subgroup_max_size
-            ))),
-            Some(VectorVariant::Subgroup) => Ok((VectorVariant::Subgroup, size / 16)),
-            None if subgroup_ok => Ok((VectorVariant::Subgroup, size / 16)),
-            None => Ok((VectorVariant::Workgroup, 1)),
-        }
-    }
-
-    fn module(self) -> &'static str {
-        match self {
-            VectorVariant::Subgroup => "shared/vec16_subgroup",
-            VectorVariant::Workgroup => "shared/vec16_workgroup",
-        }
-    }
-}
-
-/// How the kernel spends the vector's 16 lanes on a leaf triangle (DESIGN.md, "MFT in
-/// WGSL"). Both give the same masks bit for bit; only the speed differs.
-///
-/// `PerLane` is the default because it is the faster one on lavapipe, by 1.2–2.2×.
-/// Shadow pass, GPU ms, min / median of 3 runs (Mrays/s at the median), 256×256,
-/// `penumbra render`, Mesa 22.3.6 lavapipe on 2 AVX-512 cores (measured before the per-lane
-/// form took two triangles per loop step, which made it faster still):
-///
-/// | scene, vector                          | per-lane          | transposed        |
-/// |----------------------------------------|-------------------|-------------------|
-/// | Sponza atrium (1.01 M rays), subgroup  | 378 / 415 (2.44)  | 898 / 903 (1.12)  |
-/// | lattice (0.67 M rays), subgroup        | 205 / 205 (3.25)  | 247 / 252 (2.64)  |
-/// | Sponza atrium, workgroup               | 3053 / 3442 (0.29)| 6783 / 6976 (0.15)|
-/// | lattice, workgroup                     | 1163 / 1187 (0.56)| 1798 / 1829 (0.36)|
-///
-/// (subgroup: `LP_NATIVE_VECTOR_WIDTH=512`, 16-wide subgroups; workgroup: the default
-/// 8-wide build.) Lavapipe loads memory one lane at a time, so the transposed form
-/// pays two gathers (an origin, a light point) per surviving frustum where the per-lane
-/// form reuses the samples' light coordinates held in registers; and its ballots cost barriers in the
-/// workgroup vector. On a GPU, whose loads and ballots are cheap, the balance may differ.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum LeafMode {
-    /// Lane `j` culls the triangle against its own frustum and, if it survives, tests the
-    /// frustum's 16 rays itself (unrolled): no cross-lane traffic, up to two triangles per
-    /// loop step.
-    #[default]
-    PerLane,
-    /// The paper's form: lane `j` only culls; then for each frustum `f` that survives (a
-    /// ballot, bit-scanned lowest first, in an inner loop whose every pass counts towards
-    /// the iteration budget) lane `i` tests ray `i` of `f`, from `f`'s origin in workgroup
-    /// memory, and a ballot of the hits is OR-ed into `f`'s mask.
-    Transposed,
-}
-
-impl std::fmt::Display for LeafMode {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            LeafMode::PerLane => "per-lane",
-            LeafMode::Transposed => "transposed",
-        })
-    }
-}
-
 /// What a shadow pass did besides writing masks.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ShadowStats {
@@ -134,39 +37,6 @@ pub struct ShadowStats {
     pub dispatches: u32,
     /// Tile suspensions (tiles that ran out of their iteration budget, summed over rounds).
     pub suspensions: u64,
-}
-
-/// What a shadow tracer is built with besides the device.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct TracerOptions {
-    /// The tracer.
-    pub tracer: Tracer,
-    /// Force a vector variant, or `None` for the adapter's best (vector tracers only).
-    pub variant: Option<VectorVariant>,
-    /// How the MFT kernel's leaves use the lanes.
-    pub leaf_mode: LeafMode,
-    /// Count work as Table 1 does (MFT and packet; see [`Counters`]). Off, the kernels
-    /// are compiled without the counting code.
-    pub counters: bool,
-    /// MFT: shrink frusta to their own samples at the start and after leaves that
-    /// blocked rays (the paper's "CR", §5.3; see
-    /// [`crate::reference::mft::Frustum::shrink_to`]). Same masks, fewer triangle
-    /// tests, a little more work per leaf. On by default: on Sponza's atrium at
-    /// 1024×1024 it cuts the triangle tests 11× and the shadow pass takes 0.3×
-    /// the time (`penumbra bench --without-cr`).
-    pub shrink: bool,
-}
-
-impl Default for TracerOptions {
-    fn default() -> TracerOptions {
-        TracerOptions {
-            tracer: Tracer::default(),
-            variant: None,
-            leaf_mode: LeafMode::default(),
-            counters: false,
-            shrink: true,
-        }
-    }
 }
 
 /// The shadow pass's pipeline for one tracer, vector variant and leaf mode.
@@ -235,7 +105,7 @@ impl ShadowTracer {
             if variant == VectorVariant::Subgroup {
                 constants.push(("VEC16_PER_WG", f64::from(vectors_per_workgroup)));
             }
-            &[("shared/vec16", variant.module())]
+            variant.aliases()
         } else {
             &[]
         };
@@ -300,45 +170,70 @@ impl ShadowTracer {
         }
     }
 
-    /// Traces the shadow masks of a whole image: `gbuffer` (`array<GBufferTexel>`,
-    /// width × height) and `light_points` ([`ShadowTracer::light_point_count`] `vec4`s)
-    /// in, `masks` (`array<u32>`, `COPY_DST`) out. `params` gives the light and image
-    /// size; its tile fields are set here.
+    /// The bind group of one dispatch: `params` (its chunk and round) and the image's buffers.
+    fn bind(
+        &self,
+        device: &wgpu::Device,
+        scene: &GpuScene,
+        image: &ShadowImage<'_>,
+        scratch: &ShadowScratch,
+        params: &ShadowParams,
+    ) -> Result<wgpu::BindGroup> {
+        let params = uniform_buffer_on(device, "shadow params", params);
+        self.kernel.bind(
+            device,
+            &[
+                buffer("params", &params),
+                buffer("nodes", &scene.nodes),
+                buffer("triangles", &scene.triangles),
+                buffer("gbuffer", image.gbuffer),
+                buffer("light_points", image.light_points),
+                buffer("masks", image.masks),
+                buffer("state", &scratch.state),
+                buffer("status", &scratch.status),
+            ],
+        )
+    }
+
+    /// Records round `round` of the chunk `chunk` (round 0 starts its tiles afresh, later
+    /// rounds resume those that saved their state in `scratch.state`). Both drivers,
+    /// [`ShadowTracer::run`] and [`ShadowTracer::record`], dispatch through here.
+    #[allow(clippy::too_many_arguments)]
+    fn record_round(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        image: &ShadowImage<'_>,
+        scratch: &ShadowScratch,
+        chunk: &ShadowParams,
+        round: u32,
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) -> Result<()> {
+        let params = ShadowParams {
+            resume: u32::from(round > 0),
+            ..*chunk
+        };
+        let bind = self.bind(device, scene, image, scratch, &params)?;
+        let groups = self.groups(chunk.tiles_x * chunk.tiles_y);
+        self.kernel
+            .record(encoder, "shadow/trace", &bind, timestamp_writes, groups);
+        Ok(())
+    }
+
+    /// Traces the shadow masks of a whole image and waits for them: `image.gbuffer`
+    /// (width × height texels) and `image.light_points` ([`ShadowTracer::light_point_count`]
+    /// `vec4`s) in, `image.masks` (`COPY_DST`) out. `params` gives the light and image
+    /// size; its tile fields are set here. Each chunk is dispatched, and resumed while
+    /// tiles are suspended, one submission at a time, each timed as `label` when a timer is
+    /// given (the frame's shadow pass is `shadow`; the refinement's sample images `refine`);
+    /// `progress(units done, units)` follows the chunks.
     #[allow(clippy::too_many_arguments)]
     pub fn run(
         &self,
         ctx: &GpuContext,
         scene: &GpuScene,
-        gbuffer: &wgpu::Buffer,
-        light_points: &wgpu::Buffer,
-        masks: &wgpu::Buffer,
-        params: &ShadowParams,
-        timer: Option<&mut GpuTimer>,
-        progress: &mut dyn FnMut(u64, u64),
-    ) -> Result<ShadowStats> {
-        self.run_timed_as(
-            ctx,
-            scene,
-            gbuffer,
-            light_points,
-            masks,
-            params,
-            timer,
-            "shadow",
-            progress,
-        )
-    }
-
-    /// [`ShadowTracer::run`] with its dispatches timed as `label` (the refinement traces
-    /// its sample images with the frame's tracer, timed as `refine`).
-    #[allow(clippy::too_many_arguments)]
-    pub fn run_timed_as(
-        &self,
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        gbuffer: &wgpu::Buffer,
-        light_points: &wgpu::Buffer,
-        masks: &wgpu::Buffer,
+        image: &ShadowImage<'_>,
         params: &ShadowParams,
         mut timer: Option<&mut GpuTimer>,
         label: &str,
@@ -347,65 +242,46 @@ impl ShadowTracer {
         let unit = self.tracer.unit();
         let units_x = params.width.div_ceil(unit);
         let units_y = params.height.div_ceil(unit);
-        let chunk = CHUNK_TILES.min(units_x).max(1) as u64 * CHUNK_TILES.min(units_y).max(1) as u64;
-        let state = if self.tracer.uses_vector() {
-            empty_storage_buffer(
-                ctx,
-                "shadow state",
-                chunk * STATE_WORDS * 4,
-                wgpu::BufferUsages::empty(),
-            )?
+        let state_bytes = if self.tracer.uses_vector() {
+            let chunk =
+                u64::from(CHUNK_TILES.min(units_x).max(1)) * u64::from(CHUNK_TILES.min(units_y).max(1));
+            chunk * STATE_WORDS * 4
         } else {
-            empty_storage_buffer(ctx, "shadow state (unused)", 4, wgpu::BufferUsages::empty())?
+            4
         };
-        let status = empty_storage_buffer(
-            ctx,
-            "shadow status",
-            (STATUS_WORDS * 4) as u64,
-            wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-        )?;
-        let params_buf = uniform_buffer(ctx, "shadow params", params);
-        let bind = self.kernel.bind(
-            ctx,
-            &[
-                &params_buf,
-                &scene.nodes,
-                &scene.triangles,
-                gbuffer,
-                light_points,
-                masks,
-                &state,
-                &status,
-            ],
-        );
+        let scratch = ShadowScratch::sized(&ctx.device, state_bytes, 1);
         if !self.tracer.uses_vector() {
             // The per-ray kernel ORs (or adds) each ray into its pixel's word.
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
-            encoder.clear_buffer(masks, 0, None);
+            encoder.clear_buffer(image.masks, 0, None);
             ctx.queue.submit([encoder.finish()]);
         }
         let mut stats = ShadowStats::default();
         let total_units = u64::from(units_x) * u64::from(units_y);
         let mut units_done = 0u64;
-        for mut p in self.chunk_params(params) {
-            let units = p.tiles_x * p.tiles_y;
-            let groups = self.groups(units);
+        for chunk in self.chunk_params(params) {
             for round in 0.. {
                 if round == MAX_ROUNDS {
                     return Err(Error::Gpu(format!(
                         "shadow pass: tiles still suspended after {MAX_ROUNDS} rounds"
                     )));
                 }
-                p.resume = u32::from(round > 0);
-                ctx.queue.write_buffer(&params_buf, 0, bytemuck::bytes_of(&p));
                 let mut encoder = ctx.device.create_command_encoder(&Default::default());
-                encoder.clear_buffer(&status, 0, None);
+                encoder.clear_buffer(&scratch.status, 0, None);
                 let writes = timer.as_deref_mut().and_then(|t| t.pass_writes(label));
-                self.kernel
-                    .record(&mut encoder, "shadow/trace", &bind, writes, groups);
+                self.record_round(
+                    &ctx.device,
+                    &mut encoder,
+                    scene,
+                    image,
+                    &scratch,
+                    &chunk,
+                    round,
+                    writes,
+                )?;
                 ctx.queue.submit([encoder.finish()]);
                 stats.dispatches += 1;
-                let words = read_buffer::<u32>(ctx, &status, 0..(STATUS_WORDS * 4) as u64)?;
+                let words = read_buffer::<u32>(ctx, &scratch.status, 0..(STATUS_WORDS * 4) as u64)?;
                 stats.counters += Counters::from_status_words(&words);
                 if words[WORD_LOOP_CUT] != 0 {
                     return Err(Error::LoopCut {
@@ -432,7 +308,7 @@ impl ShadowTracer {
                 }
                 stats.suspensions += u64::from(words[WORD_STATUS]);
             }
-            units_done += u64::from(units);
+            units_done += u64::from(chunk.tiles_x * chunk.tiles_y);
             progress(units_done, total_units);
         }
         stats.counters.suspensions = stats.suspensions;
@@ -454,45 +330,27 @@ impl ShadowTracer {
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         scene: &GpuScene,
-        gbuffer: &wgpu::Buffer,
-        light_points: &wgpu::Buffer,
-        masks: &wgpu::Buffer,
+        image: &ShadowImage<'_>,
         scratch: &ShadowScratch,
         params: &ShadowParams,
         resume_rounds: u32,
-    ) {
+    ) -> Result<()> {
         let resume_rounds = if self.tracer.uses_vector() {
             resume_rounds
         } else {
-            encoder.clear_buffer(masks, 0, None);
+            encoder.clear_buffer(image.masks, 0, None);
             0
         };
         let word = |w: usize| (w * 4) as u64;
-        for (chunk_index, mut p) in (0u64..).zip(self.chunk_params(params)) {
-            let groups = self.groups(p.tiles_x * p.tiles_y);
+        for (chunk_index, chunk) in (0u64..).zip(self.chunk_params(params)) {
             // Loops cut short add up over the chunk's rounds; suspensions count only in
             // its last round (what is left then stays unfinished).
             encoder.clear_buffer(&scratch.status, 0, None);
             for round in 0..=resume_rounds {
-                p.resume = u32::from(round > 0);
                 if round == resume_rounds {
                     encoder.clear_buffer(&scratch.status, word(WORD_STATUS), Some(4));
                 }
-                let params_buf = uniform_buffer_on(device, "shadow params", &p);
-                let bind = self.kernel.bind_on(
-                    device,
-                    &[
-                        &params_buf,
-                        &scene.nodes,
-                        &scene.triangles,
-                        gbuffer,
-                        light_points,
-                        masks,
-                        &scratch.state,
-                        &scratch.status,
-                    ],
-                );
-                self.kernel.record(encoder, "shadow/trace", &bind, None, groups);
+                self.record_round(device, encoder, scene, image, scratch, &chunk, round, None)?;
             }
             let out = chunk_index * UNFINISHED_WORDS * 4;
             encoder.copy_buffer_to_buffer(&scratch.status, word(WORD_STATUS), &scratch.unfinished, out, 4);
@@ -504,6 +362,7 @@ impl ShadowTracer {
                 4,
             );
         }
+        Ok(())
     }
 
     /// Chunks of tiles a `width`×`height` image is traced in by the MFT tracer
@@ -513,6 +372,17 @@ impl ShadowTracer {
         let (tiles_x, tiles_y) = (width.div_ceil(4), height.div_ceil(4));
         u64::from(tiles_x.div_ceil(CHUNK_TILES)) * u64::from(tiles_y.div_ceil(CHUNK_TILES))
     }
+}
+
+/// The buffers a shadow pass reads and writes for one image.
+#[derive(Clone, Copy, Debug)]
+pub struct ShadowImage<'a> {
+    /// `array<GBufferTexel>`, width × height.
+    pub gbuffer: &'a wgpu::Buffer,
+    /// [`ShadowTracer::light_point_count`] `vec4`s (w unused).
+    pub light_points: &'a wgpu::Buffer,
+    /// `array<u32>`, one mask per pixel (`COPY_DST`: the per-ray tracers clear it first).
+    pub masks: &'a wgpu::Buffer,
 }
 
 /// The buffers [`ShadowTracer::record`] needs besides its inputs and outputs, sized for
@@ -533,7 +403,13 @@ impl ShadowScratch {
     /// Scratch buffers for `width`×`height` images, on `device`, sized for any tracer
     /// (the one-pixel tracers' chunks are the largest).
     pub fn new(device: &wgpu::Device, width: u32, height: u32) -> ShadowScratch {
-        let tiles = u64::from(CHUNK_TILES.min(width).max(1)) * u64::from(CHUNK_TILES.min(height).max(1));
+        let units = u64::from(CHUNK_TILES.min(width).max(1)) * u64::from(CHUNK_TILES.min(height).max(1));
+        let chunks = u64::from(width.div_ceil(CHUNK_TILES)) * u64::from(height.div_ceil(CHUNK_TILES));
+        ShadowScratch::sized(device, units * STATE_WORDS * 4, chunks)
+    }
+
+    /// Scratch with `state_bytes` of suspended state and room for `chunks` chunks' counts.
+    fn sized(device: &wgpu::Device, state_bytes: u64, chunks: u64) -> ShadowScratch {
         let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -545,7 +421,7 @@ impl ShadowScratch {
         ShadowScratch {
             state: buffer(
                 "shadow state",
-                tiles * STATE_WORDS * 4,
+                state_bytes,
                 // Readable so that tests can compare the saved state with the CPU twin's.
                 wgpu::BufferUsages::COPY_SRC,
             ),
@@ -556,10 +432,7 @@ impl ShadowScratch {
             ),
             unfinished: buffer(
                 "shadow unfinished tiles",
-                u64::from(width.div_ceil(CHUNK_TILES))
-                    * u64::from(height.div_ceil(CHUNK_TILES))
-                    * UNFINISHED_WORDS
-                    * 4,
+                chunks * UNFINISHED_WORDS * 4,
                 wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             ),
         }

@@ -1,3 +1,3 @@
-//! The work counters, re-exported for the CPU twins (see [`crate::counters`]).
+//! The work counters, re-exported for the CPU twins (see [`crate::contract::counters`]).
 
-pub use crate::counters::{Counters, STATUS_WORDS};
+pub use crate::contract::counters::{Counters, STATUS_WORDS};

@@ -4,7 +4,7 @@
 //!
 //! # Semantics
 //!
-//! The same as the ray-traced masks of [`super::shadow`], with infinitely
+//! The same as the ray-traced masks of [`super::shadow_per_ray`], with infinitely
 //! many rays: light point `p(s, t) = corner + s·edge_u + t·edge_v`,
 //! `(s, t) ∈ [0, 1]²`, is visible from `origin` unless
 //! - `dot(geo_normal, p − origin) ≤ 0` (below the surface's horizon), or
@@ -48,10 +48,10 @@ use glam::{DVec2, DVec3, Vec3};
 
 use super::parallel::per_pixel;
 use super::polygon::{Bounds, Fuzz, Line, Polygon, Split, area, intersect_convex, split, subtract_convex};
-use super::shadow::SHADOW_T_MAX;
+use super::shadow_per_ray::SHADOW_T_MAX;
 use crate::bvh::Bvh;
-use crate::layout::{BvhNode, BvhTriangle, GBufferTexel};
-use crate::view::QuadLight;
+use crate::contract::layout::{BvhNode, BvhTriangle, GBufferTexel};
+use crate::scene::view::QuadLight;
 use crate::{Error, Result};
 
 /// Tolerances in `(s, t)` units (the light is the unit square). A vertex
@@ -320,7 +320,7 @@ pub struct ExactImageOptions<'a> {
 }
 
 /// Exact visibility of every pixel of a row-major G-buffer, rows spread over
-/// all cores; sky pixels get 1 (as [`super::shadow::visibility`] gives them).
+/// all cores; sky pixels get 1 (as [`super::shadow_per_ray::visibility`] gives them).
 pub fn exact_visibility_image(
     bvh: &Bvh,
     gbuffer: &[GBufferTexel],

@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use crate::layout::{BvhNode, BvhTriangle};
+use crate::contract::layout::{BvhNode, BvhTriangle};
 
 /// `1 + 2γ₃` with `γₙ = n·ε / (1 − n·ε)`, ε = 2⁻²⁴: scaling the slab test's exit
 /// distance by it makes the f32 box test conservative (Ize, "Robust BVH Ray

@@ -30,9 +30,9 @@ pub fn per_pixel<T: Send + Clone + Default>(
 ///
 /// When `gbuffer` does not hold `width · height` texels (a caller bug).
 pub fn per_texel<T: Send + Clone + Default>(
-    gbuffer: &[crate::layout::GBufferTexel],
-    params: &crate::layout::ShadowParams,
-    f: impl Fn(u32, u32, &crate::layout::GBufferTexel) -> T + Sync,
+    gbuffer: &[crate::contract::layout::GBufferTexel],
+    params: &crate::contract::layout::ShadowParams,
+    f: impl Fn(u32, u32, &crate::contract::layout::GBufferTexel) -> T + Sync,
 ) -> Vec<T> {
     let (w, h) = (params.width as usize, params.height as usize);
     assert_eq!(

@@ -5,9 +5,9 @@ use glam::Vec3;
 
 use super::traverse::closest_hit_counted;
 use crate::bvh::Bvh;
-use crate::counters::Counters;
-use crate::frame::{ShadingData, camera_ray};
-use crate::layout::{CameraParams, GBufferTexel};
+use crate::contract::counters::Counters;
+use crate::contract::layout::{CameraParams, GBufferTexel};
+use crate::pass_inputs::{ShadingData, camera_ray};
 use crate::reference::Hit;
 
 /// The G-buffer texel of the camera ray from `cam.eye` along `dir` whose
@@ -16,7 +16,7 @@ use crate::reference::Hit;
 /// Normals are flipped to the side the camera ray comes from (a back face
 /// seen by the camera is lit like a front face); the shadow-ray origin is
 /// the hit point moved off the surface along the flipped geometric normal
-/// ([`crate::frame::shadow_ray_origin`]).
+/// ([`crate::pass_inputs::shadow_ray_origin`]).
 pub fn hit_texel(
     bvh: &Bvh,
     shading: &ShadingData,
@@ -44,7 +44,7 @@ pub fn hit_texel(
     let point = cam.eye + dir * hit.t;
     let uv = sh.uv0 * w + sh.uv1 * hit.u + sh.uv2 * hit.v;
     GBufferTexel {
-        origin: crate::frame::shadow_ray_origin(point, geo, cam.ray_offset),
+        origin: crate::pass_inputs::shadow_ray_origin(point, geo, cam.ray_offset),
         depth: hit.t * dir.length(),
         normal,
         triangle: hit.triangle,
@@ -81,7 +81,7 @@ pub fn primary_gbuffer(bvh: &Bvh, shading: &ShadingData, cam: &CameraParams) -> 
 }
 
 /// [`primary_gbuffer`] and the work of all its rays, counted as the per-ray
-/// kernel counts it with `COUNTERS` on (see [`crate::counters`]).
+/// kernel counts it with `COUNTERS` on (see [`crate::contract::counters`]).
 pub fn primary_gbuffer_counted(
     bvh: &Bvh,
     shading: &ShadingData,

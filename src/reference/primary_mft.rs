@@ -18,9 +18,9 @@ use super::descend::descend;
 use super::primary::hit_texel;
 use super::{Hit, intersect_triangle};
 use crate::bvh::Bvh;
-use crate::counters::Counters;
-use crate::frame::{ShadingData, camera_ray};
-use crate::layout::{BvhNode, BvhTriangle, CameraParams, GBufferTexel};
+use crate::contract::counters::Counters;
+use crate::contract::layout::{BvhNode, BvhTriangle, CameraParams, GBufferTexel};
+use crate::pass_inputs::{ShadingData, camera_ray};
 
 pub use crate::contract::primary::BLOCK;
 pub use crate::contract::{ITERATION_BUDGET, STACK_SIZE};
@@ -365,9 +365,9 @@ pub fn primary_mft_gbuffer(bvh: &Bvh, shading: &ShadingData, cam: &CameraParams,
 mod tests {
     use super::*;
     use crate::bvh::BvhSettings;
-    use crate::frame::camera_params;
+    use crate::pass_inputs::camera_params;
     use crate::reference::closest_hit;
-    use crate::view::Camera;
+    use crate::scene::view::Camera;
 
     /// xorshift64: deterministic inputs without a dependency.
     fn next(state: &mut u64) -> f32 {

@@ -27,16 +27,17 @@
 use glam::{Vec3, Vec4};
 
 use crate::bvh::Bvh;
-use crate::filter::{FULL_WINDOW, FilterParams, paired_taps};
-use crate::layout::{GBufferTexel, RefineParams, ShadeParams, ShadowParams};
+use crate::contract::filter::FilterParams;
+use crate::contract::layout::{GBufferTexel, RefineParams, ShadeParams, ShadowParams};
+use crate::reference::filter::{FULL_WINDOW, paired_taps};
 use crate::reference::shade::unshadowed_irradiance;
-use crate::reference::shadow::{MASK_FULL, per_ray_mask};
+use crate::reference::shadow_per_ray::{MASK_FULL, per_ray_mask};
 use crate::sampling::{SAMPLES, SETS, pixel_set};
 
 pub use crate::contract::refine::{REFINE_VISIBILITY_TOLERANCE, selection_params};
 
 /// Whether pixel `(x, y)` is refined (the filter's inputs as for
-/// [`crate::filter::filter_pixel`]): it has geometry, its unfiltered visibility is not the
+/// [`crate::reference::filter::filter_pixel`]): it has geometry, its unfiltered visibility is not the
 /// same all around it, and its window (with the filter's geometry tolerances from `params`
 /// and [`REFINE_VISIBILITY_TOLERANCE`]) is cut or its own 16 rays agree.
 pub fn needs_refinement(

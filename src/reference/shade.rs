@@ -5,8 +5,8 @@
 
 use glam::{Vec3, Vec4};
 
-use super::shadow::{MASK_SKY, visibility};
-use crate::layout::{GBufferTexel, ShadeParams};
+use super::shadow_per_ray::{MASK_SKY, visibility};
+use crate::contract::layout::{GBufferTexel, ShadeParams};
 
 pub use crate::contract::shade::shade_params;
 

@@ -5,7 +5,7 @@ use glam::Vec3;
 
 use super::intersect::{RayBox, intersect_box, intersect_triangle, safe_inverse};
 use crate::bvh::Bvh;
-use crate::counters::Counters;
+use crate::contract::counters::Counters;
 
 /// The nearest intersection along a ray.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -9,7 +9,7 @@ use gltf::mesh::{Mode, Semantic};
 use super::accessor::{read_indices, read_texcoords, read_vec3};
 use super::buffers::{load_buffers, load_uri, resolve_uri_path};
 use super::{AlphaMode, ImageSource, Instance, LoadWarnings, Material, Scene, SceneTriangle, glb};
-use crate::view::Camera;
+use crate::scene::view::Camera;
 
 /// Extensions that may be *required* without changing what penumbra computes:
 /// they only affect appearance terms penumbra does not use.

@@ -5,6 +5,8 @@ mod accessor;
 mod buffers;
 mod glb;
 mod gltf_import;
+pub mod view;
+pub mod view_checks;
 
 use std::path::{Path, PathBuf};
 
@@ -162,7 +164,7 @@ pub struct Scene {
     /// The nodes that contributed triangles.
     pub instances: Vec<Instance>,
     /// The first perspective camera (node cameras first, then `asset.extras.camera`), aspect ratio left to the renderer.
-    pub camera: Option<crate::view::Camera>,
+    pub camera: Option<crate::scene::view::Camera>,
     /// What was skipped or converted.
     pub warnings: LoadWarnings,
 }

@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 use penumbra::bvh::Bvh;
-use penumbra::layout::BvhNode;
+use penumbra::contract::layout::BvhNode;
 use penumbra::reference::{any_hit, closest_hit, intersect_triangle};
 
 use super::Rng;

@@ -5,7 +5,7 @@ use std::path::Path;
 use std::sync::OnceLock;
 
 use penumbra::gpu::{GpuContext, GpuOptions, VectorVariant};
-use penumbra::{assets, scene::Scene, view::View};
+use penumbra::{assets, scene::Scene, scene::view::View};
 
 /// One context per test binary; a missing adapter fails every test with the reason.
 pub fn ctx() -> &'static GpuContext {
@@ -42,9 +42,9 @@ pub fn embedded(name: &str) -> (Scene, View) {
 pub fn trace_masks(
     pass: &penumbra::gpu::ShadowTracer,
     gpu_scene: &penumbra::gpu::GpuScene,
-    texels: &[penumbra::layout::GBufferTexel],
+    texels: &[penumbra::contract::layout::GBufferTexel],
     view: &View,
-    params: &penumbra::layout::ShadowParams,
+    params: &penumbra::contract::layout::ShadowParams,
 ) -> (Vec<u32>, penumbra::gpu::ShadowStats) {
     try_trace_masks(pass, gpu_scene, texels, view, params).unwrap()
 }
@@ -54,9 +54,9 @@ pub fn trace_masks(
 pub fn try_trace_masks(
     pass: &penumbra::gpu::ShadowTracer,
     gpu_scene: &penumbra::gpu::GpuScene,
-    texels: &[penumbra::layout::GBufferTexel],
+    texels: &[penumbra::contract::layout::GBufferTexel],
     view: &View,
-    params: &penumbra::layout::ShadowParams,
+    params: &penumbra::contract::layout::ShadowParams,
 ) -> penumbra::Result<(Vec<u32>, penumbra::gpu::ShadowStats)> {
     use penumbra::gpu::{empty_storage_buffer, read_buffer, storage_buffer};
     let points: Vec<[f32; 4]> = penumbra::sampling::light_points(&view.light)
@@ -73,16 +73,12 @@ pub fn try_trace_masks(
         bytes,
         wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
     )?;
-    let stats = pass.run(
-        ctx(),
-        gpu_scene,
-        &gbuffer,
-        &light_points,
-        &masks,
-        params,
-        None,
-        &mut |_, _| {},
-    )?;
+    let image = penumbra::gpu::ShadowImage {
+        gbuffer: &gbuffer,
+        light_points: &light_points,
+        masks: &masks,
+    };
+    let stats = pass.run(ctx(), gpu_scene, &image, params, None, "shadow", &mut |_, _| {})?;
     Ok((read_buffer(ctx(), &masks, 0..bytes)?, stats))
 }
 
@@ -111,7 +107,7 @@ pub fn assert_same_rays(
     scene: &Scene,
     bvh: &penumbra::bvh::Bvh,
     view: &View,
-    gbuffer: &[penumbra::layout::GBufferTexel],
+    gbuffer: &[penumbra::contract::layout::GBufferTexel],
     width: u32,
 ) {
     if exact_arithmetic() {
@@ -119,7 +115,7 @@ pub fn assert_same_rays(
         return;
     }
     let height = a.len() as u32 / width;
-    let params = penumbra::reference::shadow::shadow_params(&view.light, width, height);
+    let params = penumbra::reference::shadow_per_ray::shadow_params(&view.light, width, height);
     let points = penumbra::sampling::light_points(&view.light);
     let corners: Vec<_> = scene.triangles.iter().map(|t| t.positions).collect();
     let c = super::compare_masks(

@@ -215,7 +215,7 @@ pub fn excuse(
 /// tests (Möller–Trumbore, the frusta's edge functions) round a few times more, so rays
 /// that two of them decide differently pass within a few such steps (≤ 16) of an edge or
 /// start or end that close to a triangle. It is 1/100 of the ray offset
-/// ([`penumbra::frame::RAY_OFFSET_FRACTION`] = 1e-4 of the diagonal), so no ray is excused
+/// ([`penumbra::pass_inputs::RAY_OFFSET_FRACTION`] = 1e-4 of the diagonal), so no ray is excused
 /// merely for starting on its own surface.
 pub fn edge_tolerance(scene: &Scene) -> f32 {
     let b = scene.bounds();
@@ -263,17 +263,17 @@ impl std::fmt::Display for MaskComparison {
 pub fn compare_masks(
     a: &[u32],
     b: &[u32],
-    gbuffer: &[penumbra::layout::GBufferTexel],
+    gbuffer: &[penumbra::contract::layout::GBufferTexel],
     width: u32,
     light_points: &[Vec3],
-    params: &penumbra::layout::ShadowParams,
+    params: &penumbra::contract::layout::ShadowParams,
     corners: &[[Vec3; 3]],
     scene_index: &dyn Fn(u32) -> Option<usize>,
     tol: f32,
 ) -> MaskComparison {
     let mut out = MaskComparison::default();
     for (p, (&ma, &mb)) in a.iter().zip(b).enumerate() {
-        if (ma | mb) & penumbra::reference::shadow::MASK_SKY != 0 {
+        if (ma | mb) & penumbra::reference::shadow_per_ray::MASK_SKY != 0 {
             if ma != mb {
                 out.unexplained
                     .push(format!("pixel {p}: sky flag differs ({ma:#x} vs {mb:#x})"));
@@ -321,13 +321,13 @@ pub fn assert_masks_match_oracle(
     label: &str,
     scene: &Scene,
     bvh: &penumbra::bvh::Bvh,
-    view: &penumbra::view::View,
-    gbuffer: &[penumbra::layout::GBufferTexel],
+    view: &penumbra::scene::view::View,
+    gbuffer: &[penumbra::contract::layout::GBufferTexel],
     masks: &[u32],
     width: u32,
     height: u32,
 ) -> (usize, usize, Vec<u32>) {
-    use penumbra::reference::shadow::{per_ray_masks, shadow_params};
+    use penumbra::reference::shadow_per_ray::{per_ray_masks, shadow_params};
     let params = shadow_params(&view.light, width, height);
     let points = penumbra::sampling::light_points(&view.light);
     let oracle = per_ray_masks(bvh, gbuffer, &points, &params);
@@ -475,13 +475,13 @@ pub fn near_miss_stack(n: usize) -> Vec<([Vec3; 3], u32)> {
 }
 
 /// `scene` and `view` scaled by `scale` about the origin, then moved by `offset`
-/// ([`Scene::translate`], [`penumbra::view::View::translated`]).
+/// ([`Scene::translate`], [`penumbra::scene::view::View::translated`]).
 pub fn scaled_and_moved(
     scene: &Scene,
-    view: &penumbra::view::View,
+    view: &penumbra::scene::view::View,
     scale: f32,
     offset: Vec3,
-) -> (Scene, penumbra::view::View) {
+) -> (Scene, penumbra::scene::view::View) {
     let mut scene = scene.clone();
     for t in &mut scene.triangles {
         for p in &mut t.positions {
@@ -507,8 +507,8 @@ pub fn scaled_and_moved(
 /// triangles' copies of the edge apart by an f32 step and lets some through.
 pub fn rays_through_a_shared_edge() -> (
     Scene,
-    penumbra::view::View,
-    Vec<penumbra::layout::GBufferTexel>,
+    penumbra::scene::view::View,
+    Vec<penumbra::contract::layout::GBufferTexel>,
     u32,
     u32,
 ) {
@@ -525,13 +525,13 @@ pub fn rays_through_a_shared_edge() -> (
     );
     let scene = scene_from_triangles(&[([a, b, c], 0), ([b, a, d], 0)], &[[0.8; 3]]);
     // Facing down (x × z = −y), towards the pair.
-    let light = penumbra::view::QuadLight::from_center(
+    let light = penumbra::scene::view::QuadLight::from_center(
         m + Vec3::new(0.0, 3.5, 0.0),
         Vec3::new(1.0, 0.0, 0.0),
         Vec3::new(0.0, 0.0, 1.0),
     );
-    let view = penumbra::view::View {
-        camera: penumbra::view::Camera {
+    let view = penumbra::scene::view::View {
+        camera: penumbra::scene::view::Camera {
             eye: m - Vec3::new(0.0, 3.0, 0.0),
             target: m,
             up: Vec3::Z,
@@ -549,7 +549,7 @@ pub fn rays_through_a_shared_edge() -> (
             let l = points[set * 16];
             let e = a + (b - a) * rng.range(0.02, 0.98);
             let origin = e - (l - e) * 0.4;
-            penumbra::layout::GBufferTexel {
+            penumbra::contract::layout::GBufferTexel {
                 origin,
                 depth: 1.0,
                 normal: (l - origin).normalize(),

@@ -2,7 +2,7 @@
 
 use glam::{Mat4, Vec3};
 
-use crate::view::QuadLight;
+use crate::scene::view::QuadLight;
 use crate::{Error, Result};
 
 /// Where the surface seen by each pixel is, in one of two forms.
@@ -67,7 +67,7 @@ pub struct ShadowInputs<'a> {
 }
 
 impl ShadowInputs<'_> {
-    /// The eye position and the clip-to-eye matrix ([`SurfaceParams::clip_to_eye`](crate::layout::SurfaceParams::clip_to_eye); identity for [`SurfaceInput::Position`]).
+    /// The eye position and the clip-to-eye matrix ([`SurfaceParams::clip_to_eye`](crate::contract::layout::SurfaceParams::clip_to_eye); identity for [`SurfaceInput::Position`]).
     pub(super) fn camera(&self) -> Result<(Vec3, Mat4)> {
         match self.surface {
             SurfaceInput::Position { eye, .. } => Ok((eye, Mat4::IDENTITY)),

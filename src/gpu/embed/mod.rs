@@ -54,13 +54,14 @@ pub use targets::{ShadowTargets, VISIBILITY_FORMAT};
 
 use glam::Vec3;
 
-use super::kernel::{Checks, Kernel, uniform_buffer_on};
-use super::{GpuContext, GpuScene, LeafMode, ShadowTracer, VectorVariant};
+use super::kernel::{Checks, Kernel, buffer, texture, uniform_buffer_on};
+use super::shadow_stages::{ShadowStages, VisibilityStage};
+use super::{GpuContext, GpuScene, LeafMode, ShadowImage, TracerOptions, VectorVariant};
 use crate::contract::ITERATION_BUDGET;
+use crate::contract::filter::FilterParams;
+use crate::contract::layout::{ImageSize, SurfaceParams};
 use crate::contract::shadow::shadow_params;
-use crate::filter::{FILTER_KERNEL, FilterParams};
-use crate::frame::RAY_OFFSET_FRACTION;
-use crate::layout::{ImageSize, SurfaceParams};
+use crate::pass_inputs::RAY_OFFSET_FRACTION;
 use crate::{Error, Result, sampling};
 
 /// Workgroups are 8×8 pixels in the per-pixel kernels.
@@ -117,12 +118,10 @@ impl Default for ShadowSettings {
 pub struct ShadowPass {
     device: wgpu::Device,
     settings: ShadowSettings,
-    tracer: ShadowTracer,
+    stages: ShadowStages,
     from_depth: Kernel,
     from_position: Kernel,
-    values: Kernel,
     to_texture: Kernel,
-    filter: Kernel,
 }
 
 impl ShadowPass {
@@ -171,12 +170,18 @@ impl ShadowPass {
         Ok(ShadowPass {
             device: ctx.device.clone(),
             settings,
-            tracer: ShadowTracer::new(ctx, settings.variant, settings.leaf_mode)?,
+            stages: ShadowStages::new(
+                ctx,
+                &TracerOptions {
+                    variant: settings.variant,
+                    leaf_mode: settings.leaf_mode,
+                    ..TracerOptions::default()
+                },
+                VisibilityStage::Values,
+            )?,
             from_depth: kernel("gbuffer_from_depth")?,
             from_position: kernel("gbuffer_from_position")?,
-            values: kernel("visibility_values")?,
             to_texture: kernel("visibility_to_texture")?,
-            filter: kernel(FILTER_KERNEL)?,
         })
     }
 
@@ -187,7 +192,7 @@ impl ShadowPass {
 
     /// The vector variant the shadow kernel runs.
     pub fn variant(&self) -> VectorVariant {
-        self.tracer.variant
+        self.stages.tracer.variant
     }
 
     /// Records the pass into the host's `encoder`: `inputs` (the host's textures, written
@@ -211,22 +216,26 @@ impl ShadowPass {
         let groups = (w.div_ceil(PIXEL_GROUP), h.div_ceil(PIXEL_GROUP));
         let device = &self.device;
 
-        let (kernel, surface_view, background_depth) = match inputs.surface {
+        let (kernel, surface_name, surface_view, background_depth) = match inputs.surface {
             SurfaceInput::Depth {
                 texture,
                 background_depth,
                 ..
             } => (
                 &self.from_depth,
+                "depth_texture",
                 texture.create_view(&wgpu::TextureViewDescriptor {
                     aspect: wgpu::TextureAspect::DepthOnly,
                     ..Default::default()
                 }),
                 background_depth,
             ),
-            SurfaceInput::Position { texture, .. } => {
-                (&self.from_position, texture.create_view(&Default::default()), 0.0)
-            }
+            SurfaceInput::Position { texture, .. } => (
+                &self.from_position,
+                "position_texture",
+                texture.create_view(&Default::default()),
+                0.0,
+            ),
         };
         let normal_view = inputs.normal.create_view(&Default::default());
         let geo_view = inputs
@@ -245,39 +254,43 @@ impl ShadowPass {
             pad: 0,
         };
         let params_buf = uniform_buffer_on(device, "surface params", &params);
-        let bind = kernel.bind_resources(
+        let pixels = &targets.pixels;
+        let bind = kernel.bind(
             device,
-            vec![
-                params_buf.as_entire_binding(),
-                wgpu::BindingResource::TextureView(&surface_view),
-                wgpu::BindingResource::TextureView(&normal_view),
-                wgpu::BindingResource::TextureView(&geo_view),
-                targets.gbuffer.as_entire_binding(),
-                targets.depth.as_entire_binding(),
-                targets.normal.as_entire_binding(),
+            &[
+                buffer("params", &params_buf),
+                texture(surface_name, &surface_view),
+                texture("normal_texture", &normal_view),
+                texture("geo_normal_texture", &geo_view),
+                buffer("gbuffer", &pixels.gbuffer),
+                buffer("depth", &pixels.depth),
+                buffer("normal", &pixels.normal),
             ],
-        );
+        )?;
         kernel.record(encoder, "embed/gbuffer", &bind, None, groups);
 
         // Relative to the scene's origin, as its BVH and the texels are.
-        let light = crate::view::QuadLight {
+        let light = crate::scene::view::QuadLight {
             corner: inputs.light.corner - scene.origin,
             ..*inputs.light
         };
         let light_points = light_points_buffer(device, &light);
         let mut shadow = shadow_params(&light, w, h);
         shadow.iteration_budget = self.settings.iteration_budget.max(1);
-        self.tracer.record(
+        let image = ShadowImage {
+            gbuffer: &pixels.gbuffer,
+            light_points: &light_points,
+            masks: &pixels.masks,
+        };
+        self.stages.tracer.record(
             device,
             encoder,
             scene,
-            &targets.gbuffer,
-            &light_points,
-            &targets.masks,
+            &image,
             &targets.scratch,
             &shadow,
             self.settings.resume_rounds,
-        );
+        )?;
 
         let size = uniform_buffer_on(
             device,
@@ -288,33 +301,19 @@ impl ShadowPass {
                 ..Default::default()
             },
         );
-        let bind = self
-            .values
-            .bind_on(device, &[&size, &targets.masks, &targets.values]);
-        self.values
-            .record(encoder, "embed/visibility", &bind, None, groups);
-        self.copy_to_texture(encoder, &size, &targets.values, &targets.unfiltered_view, groups);
-
-        let filtered_values = match self.settings.filter {
-            None => &targets.values,
-            Some((depth_tolerance, normal_tolerance)) => {
-                let params = FilterParams::with_tolerances(w, h, depth_tolerance, normal_tolerance);
-                let params_buf = uniform_buffer_on(device, "filter params", &params);
-                let bind = self.filter.bind_on(
-                    device,
-                    &[
-                        &params_buf,
-                        &targets.values,
-                        &targets.depth,
-                        &targets.normal,
-                        &targets.filtered_values,
-                    ],
-                );
-                self.filter.record(encoder, "filter", &bind, None, groups);
-                &targets.filtered_values
-            }
-        };
-        self.copy_to_texture(encoder, &size, filtered_values, &targets.filtered_view, groups);
+        let filter = self.settings.filter.map(|(depth_tolerance, normal_tolerance)| {
+            FilterParams::with_tolerances(w, h, depth_tolerance, normal_tolerance)
+        });
+        let filtered_values = self.stages.record_visibility_and_filter(
+            device,
+            encoder,
+            pixels,
+            &size,
+            filter.as_ref(),
+            None,
+        )?;
+        self.copy_to_texture(encoder, &size, &pixels.values, &targets.unfiltered_view, groups)?;
+        self.copy_to_texture(encoder, &size, filtered_values, &targets.filtered_view, groups)?;
         Ok(())
     }
 
@@ -324,24 +323,25 @@ impl ShadowPass {
         encoder: &mut wgpu::CommandEncoder,
         size: &wgpu::Buffer,
         values: &wgpu::Buffer,
-        texture: &wgpu::TextureView,
+        visibility: &wgpu::TextureView,
         groups: (u32, u32),
-    ) {
-        let bind = self.to_texture.bind_resources(
+    ) -> Result<()> {
+        let bind = self.to_texture.bind(
             &self.device,
-            vec![
-                size.as_entire_binding(),
-                values.as_entire_binding(),
-                wgpu::BindingResource::TextureView(texture),
+            &[
+                buffer("size", size),
+                buffer("values", values),
+                texture("visibility", visibility),
             ],
-        );
+        )?;
         self.to_texture
             .record(encoder, "embed/visibility", &bind, None, groups);
+        Ok(())
     }
 }
 
 /// The 256 light points as the shadow kernel reads them (`vec4` each, w unused).
-fn light_points_buffer(device: &wgpu::Device, light: &crate::view::QuadLight) -> wgpu::Buffer {
+fn light_points_buffer(device: &wgpu::Device, light: &crate::scene::view::QuadLight) -> wgpu::Buffer {
     use wgpu::util::DeviceExt;
     let points: Vec<[f32; 4]> = sampling::light_points(light)
         .iter()

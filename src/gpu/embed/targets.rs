@@ -1,8 +1,8 @@
 //! What the embedded shadow pass writes, sized for one image: the visibility textures the
 //! host samples, and the pass's own per-pixel buffers.
 
-use super::super::{GpuContext, ShadowScratch, ShadowTracer, empty_storage_buffer, read_buffer};
-use crate::layout::GBufferTexel;
+use super::super::pixel_buffers::PixelBuffers;
+use super::super::{GpuContext, ShadowScratch, ShadowTracer, read_buffer};
 use crate::{Error, Result};
 
 /// Format of both visibility textures: one 32-bit float per pixel.
@@ -34,14 +34,10 @@ pub struct ShadowTargets {
     pub filtered: wgpu::Texture,
     pub(super) unfiltered_view: wgpu::TextureView,
     pub(super) filtered_view: wgpu::TextureView,
-    /// `array<GBufferTexel>` made from the host's textures (`COPY_SRC`, for inspection).
-    pub gbuffer: wgpu::Buffer,
-    /// `array<u32>` shadow masks: bit j = ray j blocked, `1 << 16` = no geometry (`COPY_SRC`).
-    pub masks: wgpu::Buffer,
-    pub(super) depth: wgpu::Buffer,
-    pub(super) normal: wgpu::Buffer,
-    pub(super) values: wgpu::Buffer,
-    pub(super) filtered_values: wgpu::Buffer,
+    /// The per-pixel buffers (`COPY_SRC`, for inspection): the G-buffer made from the
+    /// host's textures, the shadow masks (bit j = ray j blocked, `1 << 16` = no geometry),
+    /// and what the filter reads and writes; no `brdf` (the host shades).
+    pub pixels: PixelBuffers,
     pub(super) scratch: ShadowScratch,
 }
 
@@ -58,9 +54,6 @@ impl ShadowTargets {
                 format!("size {width}x{height}: each side must be in 1..={max} on this device"),
             ));
         }
-        let pixels = u64::from(width) * u64::from(height);
-        let copy = wgpu::BufferUsages::COPY_SRC;
-        let none = wgpu::BufferUsages::empty();
         let texture = |label: &str| {
             ctx.capture_errors(label, || {
                 let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
@@ -92,17 +85,7 @@ impl ShadowTargets {
             filtered,
             unfiltered_view,
             filtered_view,
-            gbuffer: empty_storage_buffer(
-                ctx,
-                "embedded G-buffer",
-                pixels * size_of::<GBufferTexel>() as u64,
-                copy,
-            )?,
-            masks: empty_storage_buffer(ctx, "embedded shadow masks", pixels * 4, copy)?,
-            depth: empty_storage_buffer(ctx, "embedded depth", pixels * 4, none)?,
-            normal: empty_storage_buffer(ctx, "embedded normals", pixels * 16, none)?,
-            values: empty_storage_buffer(ctx, "embedded visibility", pixels * 16, none)?,
-            filtered_values: empty_storage_buffer(ctx, "embedded filtered visibility", pixels * 16, none)?,
+            pixels: PixelBuffers::new(ctx, width, height, false)?,
             scratch: ShadowScratch::new(&ctx.device, width, height),
         })
     }

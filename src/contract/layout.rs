@@ -310,12 +310,12 @@ impl BvhNode {
 }
 
 /// WGSL source of the BVH structs.
-pub const BVH_WGSL: &str = include_str!("../shaders/shared/bvh.wgsl");
+pub const BVH_WGSL: &str = include_str!("../../shaders/shared/bvh.wgsl");
 /// WGSL source of the per-frame structs (G-buffer, shadow parameters).
-pub const FRAME_WGSL: &str = include_str!("../shaders/shared/frame.wgsl");
+pub const FRAME_WGSL: &str = include_str!("../../shaders/shared/frame.wgsl");
 /// WGSL source of the embedded pass's structs; it imports [`FRAME_WGSL`], so the
 /// layout tests parse the two together.
-pub const SURFACE_WGSL: &str = include_str!("../shaders/shared/surface.wgsl");
+pub const SURFACE_WGSL: &str = include_str!("../../shaders/shared/surface.wgsl");
 
 #[cfg(test)]
 mod tests {

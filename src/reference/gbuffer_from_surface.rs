@@ -5,7 +5,7 @@
 
 use glam::{Mat4, Vec3, Vec4};
 
-use crate::layout::{GBufferTexel, SurfaceParams};
+use crate::contract::layout::{GBufferTexel, SurfaceParams};
 
 /// Clip-space position of pixel `(x, y)`'s centre at depth `z` (row 0 at the top,
 /// wgpu's depth range 0..1): the sample point a rasterizer uses for that pixel.
@@ -34,7 +34,7 @@ fn unit_or(v: Vec3, fallback: Vec3) -> Vec3 {
 
 /// The texel of surface point `point` with the host's `shading` and `geometric`
 /// normals (any length): both flipped to the camera's side, the shadow-ray origin
-/// moved off the surface along the geometric normal ([`crate::frame::shadow_ray_origin`])
+/// moved off the surface along the geometric normal ([`crate::pass_inputs::shadow_ray_origin`])
 /// and made relative to `params.origin`, `depth` the eye distance. A zero
 /// geometric normal falls back to the shading normal, a zero shading normal to the
 /// direction towards the eye. Albedo is left 0: the host shades.
@@ -50,7 +50,7 @@ pub fn surface_texel(params: &SurfaceParams, point: Vec3, shading: Vec3, geometr
         normal = -normal;
     }
     GBufferTexel {
-        origin: crate::frame::shadow_ray_origin(point, geo, params.ray_offset) - params.origin,
+        origin: crate::pass_inputs::shadow_ray_origin(point, geo, params.ray_offset) - params.origin,
         depth: dir.length(),
         normal,
         triangle: GBufferTexel::UNKNOWN_TRIANGLE,

@@ -177,7 +177,7 @@ impl View {
     ///
     /// Legal but suspicious views (a light that faces away from the whole
     /// scene, a camera inside a closed object) pass; see
-    /// [`crate::view_checks`] for the warnings the CLI prints about them.
+    /// [`crate::scene::view_checks`] for the warnings the CLI prints about them.
     pub fn validate(&self) -> Result<(), String> {
         self.camera.validate()?;
         self.light.validate()?;
@@ -215,7 +215,7 @@ impl Camera {
     }
 
     /// The unit `(forward, right, up)` frame the renderer builds from the
-    /// camera (see [`crate::frame::camera_params`]), or why there is none: eye
+    /// camera (see [`crate::pass_inputs::camera_params`]), or why there is none: eye
     /// and target at the same point, `up` zero or parallel to the view
     /// direction, or `fov_y_degrees` outside [[`MIN_FOV_Y_DEGREES`], 180). Assumes finite fields
     /// ([`Camera::validate`] checks them first).

@@ -15,7 +15,7 @@ use glam::Vec3;
 use crate::bvh::Bvh;
 use crate::reference::closest_hit;
 use crate::scene::Scene;
-use crate::view::View;
+use crate::scene::view::View;
 
 /// A legal but suspicious view; [`std::fmt::Display`] gives the warning line.
 #[derive(Clone, Copy, Debug, PartialEq)]

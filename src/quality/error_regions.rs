@@ -7,8 +7,9 @@
 //! discontinuity filter treats differently, so the table says which of its
 //! tests (geometry, visibility) the remaining error comes from.
 
-use crate::filter::{FilterParams, same_surface};
-use crate::layout::GBufferTexel;
+use crate::contract::filter::FilterParams;
+use crate::contract::layout::GBufferTexel;
+use crate::reference::filter::same_surface;
 
 /// Exact visibility within this of 0 or 1 counts as umbra or fully lit.
 const FLAT_EPSILON: f32 = 1e-4;

@@ -18,7 +18,7 @@
 use glam::{Vec3, Vec4Swizzles};
 
 use crate::bvh::Bvh;
-use crate::layout::{GBufferTexel, ShadowParams};
+use crate::contract::layout::{GBufferTexel, ShadowParams};
 use crate::reference::any_hit;
 use crate::sampling::{SAMPLES_PER_SET, pixel_set};
 

@@ -4,9 +4,9 @@
 use glam::{Vec2, Vec3, Vec4};
 
 use crate::bvh::Bvh;
-use crate::layout::{CameraParams, GpuMaterial, GpuTexture, ShadingTriangle};
+use crate::contract::layout::{CameraParams, GpuMaterial, GpuTexture, ShadingTriangle};
+use crate::scene::view::Camera;
 use crate::scene::{ImageSource, Scene};
-use crate::view::Camera;
 use crate::{Error, Result};
 
 /// Shadow-ray origins leave the surface by this fraction of the scene's
@@ -42,7 +42,7 @@ pub fn shadow_ray_origin(point: Vec3, normal: Vec3, ray_offset: f32) -> Vec3 {
 /// The camera for a `width`×`height` image (square pixels).
 ///
 /// The frame is [`Camera::basis`]; a camera without one (which
-/// [`crate::view::View::validate`] refuses) gives NaN rays, which hit nothing.
+/// [`crate::scene::view::View::validate`] refuses) gives NaN rays, which hit nothing.
 pub fn camera_params(camera: &Camera, width: u32, height: u32, ray_offset: f32) -> CameraParams {
     let (forward, right, up) = camera.basis().unwrap_or((Vec3::NAN, Vec3::NAN, Vec3::NAN));
     let tan = (camera.fov_y_degrees.to_radians() * 0.5).tan();

@@ -4,18 +4,18 @@
 //! ray's slab test hits it; at a leaf every active ray is tested against every
 //! triangle (Möller–Trumbore, as the per-ray oracle) and a ray that hits drops
 //! out (early termination). The traversal order and step structure are those
-//! of the MFT kernel (see [`super::mft`]), so the two differ only in what a
+//! of the MFT kernel (see [`super::shadow_mft`]), so the two differ only in what a
 //! lane is: a ray here, a frustum there.
 
 use glam::Vec3;
 
 use super::counters::Counters;
 use super::descend::descend;
-use super::mft::STACK_SIZE;
-use super::shadow::{MASK_SKY, initial_mask};
+use super::shadow_mft::STACK_SIZE;
+use super::shadow_per_ray::{MASK_SKY, initial_mask};
 use super::{RayBox, intersect_box, intersect_triangle, safe_inverse};
 use crate::bvh::Bvh;
-use crate::layout::{GBufferTexel, ShadowParams};
+use crate::contract::layout::{GBufferTexel, ShadowParams};
 use crate::sampling::{SAMPLES_PER_SET, pixel_set};
 
 /// Traces one pixel's 16 rays as a packet; returns its mask (bits of blocked

@@ -14,9 +14,9 @@
 use glam::{Vec2, Vec3};
 
 use super::descend::descend;
-use super::shadow::{MASK_FULL, MASK_SKY, initial_mask, light_corners};
+use super::shadow_per_ray::{MASK_FULL, MASK_SKY, initial_mask, light_corners};
 use crate::bvh::Bvh;
-use crate::layout::{BvhNode, BvhTriangle, GBufferTexel, ShadowParams};
+use crate::contract::layout::{BvhNode, BvhTriangle, GBufferTexel, ShadowParams};
 use crate::sampling::SAMPLES_PER_SET;
 
 pub use crate::contract::STACK_SIZE;
