@@ -1,5 +1,5 @@
 // GPU self-test: copies the `count` field of every BVH node into a u32 buffer.
-// Run by tests/gpu_smoke.rs to check adapter, buffers, timer and `#import` end to end.
+// Run by tests/gpu/smoke.rs to check adapter, buffers, timer and `#import` end to end.
 
 #import shared/bvh
 

@@ -16,7 +16,6 @@ fn hit_triangle(t: u32) -> BvhTriangle {
 }
 
 // Pushes both children of a node: the stack holds at most depth + 1 entries.
-const STACK_SIZE: u32 = 64u;
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {

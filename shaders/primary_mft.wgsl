@@ -38,7 +38,6 @@ fn hit_triangle(t: u32) -> BvhTriangle {
     return triangle_from_memory(t);
 }
 
-const STACK_SIZE: u32 = 64u;
 const DEPTH_SLACK: f32 = 1.001;
 const T_NONE: f32 = 3.4028234663852886e38;
 const NO_TRIANGLE: u32 = 0xffffffffu;

@@ -4,7 +4,6 @@
 #import shared/frame
 
 const PI: f32 = 3.14159265358979;
-const MASK_SKY: u32 = 0x10000u;
 // 0: masks hold 16 ray bits. Otherwise the reference tracer's count of blocked
 // rays out of REFERENCE_RAYS.
 override REFERENCE_RAYS: u32 = 0u;

@@ -5,12 +5,10 @@
 #import shared/counters
 #import shared/descend
 #import shared/frame
+#import shared/suspend
 #import shared/vec16
 #import shared/bvh_vec16
 
-const STACK_SIZE: u32 = 64u;
-const MASK_FULL: u32 = 0xffffu;
-const MASK_SKY: u32 = 0x10000u;
 // Suspended-state slot of a tile: status, children, mask, cursor, end, alive,
 // stack depth, popping (| 2: traversal done), 16 lane masks, 64 stack nodes,
 // 64 stack masks, the candidate frusta of a transposed leaf (`cand`), the
@@ -18,14 +16,9 @@ const MASK_SKY: u32 = 0x10000u;
 // unused, and 16 lane words of `f_shrunk_for`.
 const STATE_WORDS: u32 = 176u;
 const ST_SHRUNK: u32 = 160u;
-const ST_STATUS: u32 = 0u;
-const ST_LANES: u32 = 8u;
-const ST_STACK_NODE: u32 = 24u;
-const ST_STACK_MASK: u32 = 88u;
 const ST_CAND: u32 = 152u;
 const ST_LEAF_MASK: u32 = 153u;
 const ST_PENDING: u32 = 154u;
-const STATUS_SUSPENDED: u32 = 1u;
 
 // How a leaf triangle spends the 16 lanes (LeafMode in src/gpu/shadow_tracer.rs).
 // false, per lane: lane j culls the triangle against its own frustum and tests

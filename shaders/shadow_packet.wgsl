@@ -5,21 +5,15 @@
 #import shared/counters
 #import shared/descend
 #import shared/frame
+#import shared/suspend
 #import shared/intersect
 #import shared/vec16
 #import shared/bvh_vec16
 
-const STACK_SIZE: u32 = 64u;
-const MASK_SKY: u32 = 0x10000u;
-// Suspended-state slot of a pixel: the MFT kernel's layout (status, node,
+// Suspended-state slot of a pixel: shared/suspend (status, node,
 // mask, cursor, end, alive, stack depth, popping, 16 lane words, 64 stack
 // nodes, 64 stack masks); a lane word is 1 when the lane's ray is blocked.
 const STATE_WORDS: u32 = 160u;
-const ST_STATUS: u32 = 0u;
-const ST_LANES: u32 = 8u;
-const ST_STACK_NODE: u32 = 24u;
-const ST_STACK_MASK: u32 = 88u;
-const STATUS_SUSPENDED: u32 = 1u;
 
 
 @group(0) @binding(0) var<uniform> params: ShadowParams;

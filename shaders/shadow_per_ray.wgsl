@@ -7,8 +7,6 @@
 #import shared/frame
 #import shared/intersect
 
-const STACK_SIZE: u32 = 64u;
-const MASK_SKY: u32 = 0x10000u;
 const WG_SIZE: u32 = 64u;
 
 // 16: the pixel's ray j goes to point j of its interleaved set (x mod 4 + 4 (y mod 4)),

@@ -3,7 +3,6 @@
 
 #import shared/surface
 
-const MASK_SKY: u32 = 0x10000u;
 
 @group(0) @binding(0) var<uniform> size: ImageSize;
 @group(0) @binding(1) var<storage, read> masks: array<u32>;

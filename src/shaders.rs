@@ -63,6 +63,7 @@ pub static SOURCES: &[(&str, &str)] = &[
     ("shared/primary", include_str!("../shaders/shared/primary.wgsl")),
     ("shared/refine", include_str!("../shaders/shared/refine.wgsl")),
     ("shared/surface", include_str!("../shaders/shared/surface.wgsl")),
+    ("shared/suspend", include_str!("../shaders/shared/suspend.wgsl")),
     (
         "shared/vec16_subgroup",
         include_str!("../shaders/shared/vec16_subgroup.wgsl"),

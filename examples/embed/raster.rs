@@ -1,6 +1,6 @@
 //! The example host's own G-buffer: a plain wgpu render pipeline that rasterizes a
 //! penumbra scene into depth, normals and albedo textures — what a game engine already
-//! has before it adds penumbra's shadows. `tests/gpu_embed.rs` rasterizes with it too.
+//! has before it adds penumbra's shadows. `tests/gpu/embed.rs` rasterizes with it too.
 
 use glam::{Mat4, Vec3};
 use penumbra::scene::Scene;

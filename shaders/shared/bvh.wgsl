@@ -1,6 +1,10 @@
 // The flattened BVH as the GPU reads it: 32-byte nodes and 48-byte triangles.
 // Mirrors `src/contract/layout.rs` (BvhNode, BvhTriangle); a naga test checks sizes and offsets.
 
+// Entries of every traversal stack (a BVH deeper than this is refused on the CPU;
+// src/contract/mod.rs STACK_SIZE, checked by a naga test).
+const STACK_SIZE: u32 = 64u;
+
 // One BVH node, 32 bytes. Inner node (count == 0): its children are nodes
 // `first` and `first + 1`, so one 64-byte read brings both child boxes.
 // Leaf (count > 0): triangles `first .. first + count`, stored in leaf order.

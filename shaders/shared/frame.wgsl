@@ -1,6 +1,11 @@
 // Per-frame structs shared by the primary, shadow and shade passes.
 // Mirrors `src/contract/layout.rs` (GBufferTexel, ShadowParams); a naga test checks sizes and offsets.
 
+// Shadow mask words: bit j = ray j blocked (MASK_FULL: all 16), MASK_SKY = the pixel
+// sees no geometry (src/contract/shadow.rs, checked by a naga test).
+const MASK_FULL: u32 = 0xffffu;
+const MASK_SKY: u32 = 0x10000u;
+
 // One G-buffer pixel, 64 bytes.
 struct GBufferTexel {
     origin: vec3<f32>,      // bytes 0..12: shadow-ray origin (hit point moved off the surface)

@@ -3,7 +3,7 @@
 //! embedded in the binary ([`EMBEDDED_SCENES`]) so the CLI and the tests run
 //! without any files around.
 //!
-//! `tests/assets.rs` checks that the committed files are exactly what the
+//! `tests/cpu/assets.rs` checks that the committed files are exactly what the
 //! generator produces; after changing the generator, run
 //! `cargo run --release --example generate_assets`.
 
@@ -32,7 +32,7 @@ impl EmbeddedScene {
     /// The scene's parsed view.
     pub fn view(&self) -> View {
         let path = Path::new("assets/views").join(format!("{}.json", self.name));
-        // Every embedded view is parsed by tests/assets.rs: failing here is a bug.
+        // Every embedded view is parsed by tests/cpu/assets.rs: failing here is a bug.
         View::from_json(self.view_json, &path).expect("embedded views are valid")
     }
 }

@@ -29,7 +29,7 @@ pub struct BvhNode {
 /// them. Storing corners (not a corner and two edges, whose sum rounds) keeps the copies
 /// of a vertex that several triangles share bit-identical, so the multi-frusta edge
 /// functions of a shared edge are exactly negated and no ray slips between the two
-/// triangles (`tests/shadow_cpu.rs`, `tests/gpu_tracers.rs`: the closed room).
+/// triangles (`tests/cpu/shadow_mft.rs`, `tests/gpu/shadow_tracers.rs`: the closed room).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct BvhTriangle {

@@ -82,7 +82,7 @@ mod tests {
 
     /// The suspended-state layout and the constants the twin shares with
     /// `shaders/shadow_mft.wgsl` (the kernel's saved words are compared with the twin's
-    /// in tests/gpu_tracers.rs; this names a mismatch on the CPU).
+    /// in tests/gpu/shadow_tracers.rs; this names a mismatch on the CPU).
     #[test]
     fn the_kernel_has_the_twins_constants() {
         use naga::Literal::{F32, U32};

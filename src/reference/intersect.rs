@@ -41,7 +41,7 @@ pub fn intersect_box(ray: &RayBox, node: &BvhNode, t_max: f32) -> Option<f32> {
 /// `0 < t < t_max`, both faces, or `None`. Edges count as inside (`u, v ≥ 0`,
 /// `u + v ≤ 1`), but the two triangles of a shared edge round their barycentrics
 /// differently, so a ray through the edge itself can miss both: it is not
-/// watertight (`tests/shadow_cpu.rs` aims 4,096 rays at a shared edge and counts
+/// watertight (`tests/cpu/shadow_mft.rs` aims 4,096 rays at a shared edge and counts
 /// those that pass; the multi-frusta test lets none through).
 pub fn intersect_triangle(tri: &BvhTriangle, origin: Vec3, dir: Vec3, t_max: f32) -> Option<(f32, f32, f32)> {
     let (e1, e2) = (tri.v1 - tri.v0, tri.v2 - tri.v0);

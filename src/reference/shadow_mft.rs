@@ -220,7 +220,7 @@ pub enum TriangleOutcome {
 /// inclusive: a shared edge, whose corners the two triangles store as the
 /// same bits, gives them exactly negated normals and edge functions, so a ray
 /// on it hits both and none slips between them — tested on a closed room in
-/// `tests/shadow_cpu.rs`), and it reaches the triangle's plane at `t = D / Σ m_e·(p −
+/// `tests/cpu/shadow_mft.rs`), and it reaches the triangle's plane at `t = D / Σ m_e·(p −
 /// origin)`, so it hits when `|D| < t_max·|Σ m_e·(p − origin)|`. With `p = c0 +
 /// s·eu + t·ev` each `m_e·(p − origin)` is an edge function `a + b·s + c·t` of
 /// the sample's light coordinates: three dot products per edge and triangle,
@@ -407,18 +407,6 @@ impl TileOptions {
     }
 }
 
-/// Traces one 4×4 tile's 16 frusta; returns the 16 occlusion masks (lane order).
-/// [`trace_tile_with`] with [`TileOptions::with_budget`].
-pub fn trace_tile(
-    bvh: &Bvh,
-    frusta: [Frustum; 16],
-    params: &ShadowParams,
-    budget: u32,
-    counters: &mut Counters,
-) -> [u32; 16] {
-    trace_tile_with(bvh, frusta, params, &TileOptions::with_budget(budget), counters)
-}
-
 /// The next triangle of the current leaf against every frustum that entered
 /// it and is not done; returns the frusta that were left after culling and the
 /// rays of each that hit it (per-lane leaves OR them in at once; transposed
@@ -527,14 +515,15 @@ fn right_first(bvh: &Bvh, l: u32, params: &ShadowParams) -> bool {
     key(right) < key(left)
 }
 
-/// [`trace_tile`] under `options`: dispatch after dispatch ([`dispatch_tile`]), each
+/// Traces one 4×4 tile's 16 frusta under `options` and returns the 16 occlusion masks
+/// (lane order): dispatch after dispatch ([`dispatch_tile`]), each
 /// suspended one resumed from the state it saved, as the GPU pass resumes its tiles.
 ///
 /// Each loop iteration is one step of the kernel, which may do, in this
 /// order: two traversal steps (each a stack pop and an inner node), one or two
 /// triangles of the current leaf, and the end of a leaf (see
 /// `shaders/shadow_mft.wgsl` for why).
-pub fn trace_tile_with(
+pub fn trace_tile(
     bvh: &Bvh,
     frusta: [Frustum; 16],
     params: &ShadowParams,
@@ -729,39 +718,11 @@ pub fn dispatch_tile(
     TileRun::Finished(frusta.map(|f| f.occluded))
 }
 
-/// Occlusion masks of a whole G-buffer (row-major) with multi-frusta tracing,
-/// tile by tile; tiles are spread over all cores.
+/// Occlusion masks of a whole G-buffer (row-major) with multi-frusta tracing as the
+/// kernel runs under `options`, tile by tile; tiles are spread over all cores. The masks
+/// do not depend on the leaf mode; the counters do (transposed leaves take more steps per
+/// leaf, so the traversal stage runs ahead of them by other nodes).
 pub fn mft_masks(
-    bvh: &Bvh,
-    gbuffer: &[GBufferTexel],
-    light_points: &[Vec3],
-    params: &ShadowParams,
-    budget: u32,
-) -> (Vec<u32>, Counters) {
-    mft_masks_with(bvh, gbuffer, light_points, params, budget, false)
-}
-
-/// [`mft_masks`], with frustum shrinking when `shrink` is set.
-pub fn mft_masks_with(
-    bvh: &Bvh,
-    gbuffer: &[GBufferTexel],
-    light_points: &[Vec3],
-    params: &ShadowParams,
-    budget: u32,
-    shrink: bool,
-) -> (Vec<u32>, Counters) {
-    let options = TileOptions {
-        budget,
-        shrink,
-        transposed: false,
-    };
-    mft_masks_with_options(bvh, gbuffer, light_points, params, &options)
-}
-
-/// [`mft_masks`] as the kernel runs under `options`. The masks do not depend on
-/// the leaf mode; the counters do (transposed leaves take more steps per leaf,
-/// so the traversal stage runs ahead of them by other nodes).
-pub fn mft_masks_with_options(
     bvh: &Bvh,
     gbuffer: &[GBufferTexel],
     light_points: &[Vec3],
@@ -798,7 +759,7 @@ pub fn mft_masks_with_options(
                             });
                             out.push((
                                 ty * tw + tx,
-                                trace_tile_with(bvh, frusta, params, options, &mut counters),
+                                trace_tile(bvh, frusta, params, options, &mut counters),
                             ));
                         }
                     }

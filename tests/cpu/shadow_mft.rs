@@ -2,7 +2,7 @@
 //! generated scenes: the same occlusion masks up to rays that graze an edge,
 //! and the same masks whether or not a tile is suspended and resumed.
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 
@@ -10,8 +10,8 @@ use glam::Vec3;
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::pass_inputs::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
 use penumbra::reference::primary::primary_gbuffer;
-use penumbra::reference::shadow_mft::{Counters, mft_masks, mft_masks_with};
-use penumbra::reference::shadow_mft::{TileOptions, mft_masks_with_options};
+use penumbra::reference::shadow_mft::TileOptions;
+use penumbra::reference::shadow_mft::{Counters, mft_masks};
 use penumbra::reference::shadow_packet::packet_masks;
 use penumbra::reference::shadow_per_ray::{ITERATION_BUDGET, shadow_params};
 use penumbra::reference::shadow_per_ray::{MASK_FULL, per_ray_masks};
@@ -67,7 +67,13 @@ fn mft_twin_matches_per_ray_oracle_on_generated_scenes() {
             params,
             points,
         } = Case::new(s, w, h);
-        let (mft, counters) = mft_masks(&bvh, &gbuffer, &points, &params, ITERATION_BUDGET);
+        let (mft, counters) = mft_masks(
+            &bvh,
+            &gbuffer,
+            &points,
+            &params,
+            &TileOptions::with_budget(ITERATION_BUDGET),
+        );
         let (differing, total, oracle) =
             assert_masks_match_oracle(s.name, &scene, &bvh, &view, &gbuffer, &mft, w, h);
         let occluded: u32 = oracle.iter().map(|m| (m & 0xffff).count_ones()).sum();
@@ -88,7 +94,7 @@ fn mft_twin_matches_per_ray_oracle_on_generated_scenes() {
 /// back (lane masks, shrunk rectangles, stack, pending leaf) and goes on. So a tile cut
 /// into dispatches of a few steps gives the masks of an uninterrupted run and, with
 /// per-lane leaves (whose steps do not depend on where a dispatch ends), the same work
-/// counted step for step. (tests/gpu_tracers.rs compares the saved words with the
+/// counted step for step. (tests/gpu/shadow_tracers.rs compares the saved words with the
 /// kernel's.)
 #[test]
 fn suspending_and_resuming_keeps_the_masks_and_the_work() {
@@ -107,7 +113,7 @@ fn suspending_and_resuming_keeps_the_masks_and_the_work() {
                     shrink,
                     transposed,
                 };
-                mft_masks_with_options(&bvh, &gbuffer, &points, &params, &options)
+                mft_masks(&bvh, &gbuffer, &points, &params, &options)
             };
             let (whole, c1) = run(u32::MAX);
             let (pieces, c2) = run(7);
@@ -137,8 +143,23 @@ fn frustum_shrinking_keeps_the_masks_and_saves_triangle_tests() {
             points,
             ..
         } = Case::new(s, 64, 48);
-        let (plain, c0) = mft_masks_with(&bvh, &gbuffer, &points, &params, ITERATION_BUDGET, false);
-        let (shrunk, c1) = mft_masks_with(&bvh, &gbuffer, &points, &params, ITERATION_BUDGET, true);
+        let (plain, c0) = mft_masks(
+            &bvh,
+            &gbuffer,
+            &points,
+            &params,
+            &TileOptions::with_budget(ITERATION_BUDGET),
+        );
+        let (shrunk, c1) = mft_masks(
+            &bvh,
+            &gbuffer,
+            &points,
+            &params,
+            &TileOptions {
+                shrink: true,
+                ..TileOptions::with_budget(ITERATION_BUDGET)
+            },
+        );
         println!(
             "{}: triangle tests {} → {} with CR; {c0:?} {c1:?}",
             s.name, c0.triangle_tests, c1.triangle_tests
@@ -207,7 +228,7 @@ fn the_oracle_comparison_does_not_excuse_a_ray_for_its_own_surface() {
 }
 
 /// The CPU twins are watertight too: a closed room of 25,392 triangles, lit from
-/// outside and seen from inside (tests/gpu_tracers.rs has the same room on the GPU), is
+/// outside and seen from inside (tests/gpu/shadow_tracers.rs has the same room on the GPU), is
 /// dark at every pixel for the MFT twin in every mode, the packet twin and the oracle.
 #[test]
 fn the_cpu_tracers_keep_a_closed_room_dark() {
@@ -243,7 +264,7 @@ fn the_cpu_tracers_keep_a_closed_room_dark() {
             shrink,
             transposed,
         };
-        let masks = mft_masks_with_options(&bvh, &gbuffer, &points, &params, &options).0;
+        let masks = mft_masks(&bvh, &gbuffer, &points, &params, &options).0;
         runs.push((
             if transposed {
                 "mft twin, transposed"
@@ -284,7 +305,7 @@ fn no_ray_slips_through_a_shared_edge() {
             shrink,
             transposed,
         };
-        let masks = mft_masks_with_options(&bvh, &gbuffer, &points, &params, &options).0;
+        let masks = mft_masks(&bvh, &gbuffer, &points, &params, &options).0;
         let n = through(&masks);
         eprintln!(
             "mft twin shrink {shrink} transposed {transposed}: {n} of {} aimed rays pass",

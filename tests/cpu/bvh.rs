@@ -2,7 +2,7 @@
 //! exactly one leaf, children inside parents, and closest-hit / any-hit over the
 //! BVH equal to brute force over all triangles on random rays.
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 

@@ -4,11 +4,11 @@
 //!
 //! Run with `--nocapture` to see the figures measured.
 
-mod support;
+use crate::support;
 
 // The example application's G-buffer pass: the test rasterizes exactly as the example does.
 #[allow(dead_code)]
-#[path = "../examples/embed/raster.rs"]
+#[path = "../../examples/embed/raster.rs"]
 mod raster;
 
 use penumbra::Error;

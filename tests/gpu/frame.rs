@@ -6,7 +6,7 @@
 //! Run with `--nocapture` to see the figures measured; on lavapipe set
 //! `LP_NATIVE_VECTOR_WIDTH=512` to test the subgroup vector too.
 
-mod support;
+use crate::support;
 
 use std::time::Instant;
 
@@ -18,7 +18,7 @@ use penumbra::gpu::{Frame, FrameSettings, GpuScene, LeafMode, Renderer, Renderer
 use penumbra::pass_inputs::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
 use penumbra::reference::filter::discontinuity_filter;
 use penumbra::reference::primary::primary_gbuffer;
-use penumbra::reference::shadow_mft::{Counters, Frustum, TileOptions, mft_masks_with, trace_tile_with};
+use penumbra::reference::shadow_mft::{Counters, Frustum, TileOptions, mft_masks, trace_tile};
 use penumbra::reference::shadow_per_ray::{
     ITERATION_BUDGET, MASK_FULL, MASK_SKY, per_ray_masks, shadow_params,
 };
@@ -123,7 +123,7 @@ fn tile_counters(
                 shrink: RendererOptions::default().shrink,
                 transposed: leaf_mode == LeafMode::Transposed,
             };
-            trace_tile_with(bvh, frusta, params, &options, &mut c);
+            trace_tile(bvh, frusta, params, &options, &mut c);
             tiles.push(c);
         }
     }
@@ -492,7 +492,16 @@ fn loop_limit_tile_still_matches_oracle() {
             .map(|&s| s.saturating_sub(1) / u64::from(ITERATION_BUDGET))
             .sum();
         let shrink = RendererOptions::default().shrink;
-        let (twin, counters) = mft_masks_with(&bvh, &gbuffer, &points, &params, ITERATION_BUDGET, shrink);
+        let (twin, counters) = mft_masks(
+            &bvh,
+            &gbuffer,
+            &points,
+            &params,
+            &TileOptions {
+                shrink,
+                ..TileOptions::with_budget(ITERATION_BUDGET)
+            },
+        );
         if leaf_mode == LeafMode::PerLane {
             // Suspending and resuming adds no step.
             assert_eq!(
@@ -551,7 +560,7 @@ fn loop_limit_tile_still_matches_oracle() {
                 other_triangle, 0,
                 "{variant}: the G-buffer differs from the CPU twin's"
             );
-            // The oracle on the GPU's own G-buffer, as in tests/gpu_render.rs.
+            // The oracle on the GPU's own G-buffer, as in tests/gpu/shadow_mft.rs.
             let oracle = per_ray_masks(&bvh, gpu_gbuffer, &points, &params);
             let c = compare_masks(
                 &oracle,
@@ -758,7 +767,7 @@ fn cli_free_sizes() {
     }
     // A forced tile too large for one storage buffer: refused before anything is
     // allocated, naming the limit and the largest image that fits. (Unforced, the
-    // renderer picks tiles that fit: tests/gpu_tiles.rs.)
+    // renderer picks tiles that fit: tests/gpu/tiles.rs.)
     let limit = penumbra::gpu::memory::storage_limit(ctx());
     let side = ((limit / 64) as f64).sqrt() as u32 + 64; // a G-buffer over the limit
     let mut settings = FrameSettings::new(side, side);

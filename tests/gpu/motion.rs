@@ -4,7 +4,7 @@
 //!
 //! Run with `--nocapture` to see the figures measured.
 
-mod support;
+use crate::support;
 
 use glam::{Mat4, Quat, Vec3};
 use penumbra::Error;

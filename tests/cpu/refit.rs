@@ -2,7 +2,7 @@
 //! boxes of the moved geometry, answers queries like brute force, reports every change in
 //! its upload ranges, and its SAH cost grows when moved triangles scatter.
 
-mod support;
+use crate::support;
 
 use glam::{Mat4, Quat, Vec3};
 use penumbra::bvh::{Bvh, BvhSettings, MERGE_GAP_BYTES};

@@ -7,7 +7,7 @@
 //! multiply-adds differently in different pipelines. Where the subgroup variant is
 //! missing, the test says so and compares the workgroup runs only.
 
-mod support;
+use crate::support;
 
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::gpu::{Frame, FrameSettings, GpuScene, LeafMode, Renderer, RendererOptions, VectorVariant};

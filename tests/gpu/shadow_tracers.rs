@@ -2,7 +2,7 @@
 //! masks against the CPU oracles, and the Table-1 counters of the MFT and packet
 //! kernels against their CPU twins and against counts made by hand.
 
-mod support;
+use crate::support;
 
 use glam::Vec3;
 use penumbra::bvh::{Bvh, BvhSettings};
@@ -12,7 +12,7 @@ use penumbra::gpu::{
     VectorVariant,
 };
 use penumbra::reference::counters::Counters;
-use penumbra::reference::shadow_mft::{TileOptions, mft_masks, mft_masks_with_options};
+use penumbra::reference::shadow_mft::{TileOptions, mft_masks};
 use penumbra::reference::shadow_packet::packet_masks;
 use penumbra::reference::shadow_per_ray::{ITERATION_BUDGET, MASK_FULL, reference_counts, shadow_params};
 use penumbra::scene::Scene;
@@ -175,7 +175,13 @@ fn counters_equal_the_cpu_twins() {
         let (scene, view, bvh, gpu_scene, texels) = traced_gbuffer(s.name, w, h);
         let params = shadow_params(&view.light, w, h);
         let points = sampling::light_points(&view.light);
-        let (mft_plain, _) = mft_masks(&bvh, &texels, &points, &params, ITERATION_BUDGET);
+        let (mft_plain, _) = mft_masks(
+            &bvh,
+            &texels,
+            &points,
+            &params,
+            &TileOptions::with_budget(ITERATION_BUDGET),
+        );
         // The twin's counters as the kernel runs: shrinking and leaf mode.
         let twin = |shrink, transposed| {
             let options = TileOptions {
@@ -183,7 +189,7 @@ fn counters_equal_the_cpu_twins() {
                 shrink,
                 transposed,
             };
-            mft_masks_with_options(&bvh, &texels, &points, &params, &options).1
+            mft_masks(&bvh, &texels, &points, &params, &options).1
         };
         let (_, packet_twin) = packet_masks(&bvh, &texels, &points, &params, ITERATION_BUDGET);
         for variant in variants() {
@@ -322,7 +328,13 @@ fn counters_match_hand_counts() {
         let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
         let params = shadow_params(&view.light, 4, 4);
         let points = sampling::light_points(&view.light);
-        let (_, twin_mft) = mft_masks(&bvh, &texels, &points, &params, ITERATION_BUDGET);
+        let (_, twin_mft) = mft_masks(
+            &bvh,
+            &texels,
+            &points,
+            &params,
+            &TileOptions::with_budget(ITERATION_BUDGET),
+        );
         let (_, twin_packet) = packet_masks(&bvh, &texels, &points, &params, ITERATION_BUDGET);
         assert_eq!(twin_mft.gpu_view(), mft, "MFT twin, {} triangles", tris.len());
         assert_eq!(
@@ -596,7 +608,7 @@ fn a_suspended_tile_saves_the_state_the_twin_saves() {
 /// The MFT kernel lets no ray slip through an edge two triangles share: 4,096 rays aimed
 /// at points of such an edge (corners that `v0 + e1` would not rebuild exactly) are all
 /// blocked, in both leaf modes and every vector variant, as in the CPU twin
-/// (tests/shadow_cpu.rs). The Möller–Trumbore tracers (packet, per-ray) are not
+/// (tests/cpu/shadow_mft.rs). The Möller–Trumbore tracers (packet, per-ray) are not
 /// watertight there; their counts are printed, not asserted.
 #[test]
 fn no_ray_slips_through_a_shared_edge_on_the_gpu() {

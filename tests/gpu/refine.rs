@@ -4,7 +4,7 @@
 //!
 //! On lavapipe set `LP_NATIVE_VECTOR_WIDTH=512` to run with 16-wide subgroups too.
 
-mod support;
+use crate::support;
 
 use std::time::Instant;
 

@@ -3,7 +3,7 @@
 //! horizon) and against a 16,384-sample Monte Carlo estimate at 1,000 points
 //! of the default scene, traced with the per-ray oracle's rules.
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 

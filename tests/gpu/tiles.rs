@@ -2,7 +2,7 @@
 //! the stitched frame equals the one-piece frame bit for bit, and sizes past the
 //! device's limit are refused with the limit named.
 
-mod support;
+use crate::support;
 
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::gpu::{FrameSettings, GpuScene, PrimaryTracer, Renderer, RendererOptions, Tracer};

@@ -7,7 +7,7 @@
 //! Run with `--nocapture` to see the figures; on lavapipe set
 //! `LP_NATIVE_VECTOR_WIDTH=512` to test the subgroup vector too.
 
-mod support;
+use crate::support;
 
 use glam::Vec3;
 use penumbra::bvh::{Bvh, BvhSettings};
@@ -117,7 +117,7 @@ fn assert_equal_but_ties(label: &str, a: &[GBufferTexel], b: &[GBufferTexel], wi
 }
 
 /// Asserts that a GPU G-buffer matches its CPU twin within the primary pass's
-/// tolerance (gpu_frame.rs): hits on the same triangle but for 0.1 % of pixels,
+/// tolerance (tests/gpu/frame.rs): hits on the same triangle but for 0.1 % of pixels,
 /// and positions, depths and normals within 1e-4; returns the pixels that
 /// differ at all.
 fn assert_close(label: &str, gpu: &[GBufferTexel], cpu: &[GBufferTexel], diagonal: f32) -> usize {

@@ -2,9 +2,9 @@
 //! vector variants against the per-ray oracle, transposed leaves against per-lane
 //! ones, and tiles suspended at every kind of step resumed to the same masks. (The
 //! primary pass, the filter, exact lit/umbra values and a tile past lavapipe's loop
-//! limit are in tests/gpu_frame.rs.)
+//! limit are in tests/gpu/frame.rs.)
 
-mod support;
+use crate::support;
 
 use penumbra::assets;
 use penumbra::bvh::{Bvh, BvhSettings};

@@ -1,0 +1,7 @@
+//! The `penumbra` binary end to end: commands, outputs and the errors bad input gives.
+
+mod big_render;
+mod compare;
+mod errors;
+mod quality;
+mod render;

@@ -1,0 +1,13 @@
+//! CPU tests: the loaders, the BVH, the CPU oracles and twins against each other and closed forms; no GPU needed.
+
+#[path = "../support/mod.rs"]
+mod support;
+
+mod assets;
+mod bvh;
+mod exact_visibility;
+mod metrics;
+mod refit;
+mod scene_loader;
+mod shadow_mft;
+mod views;

@@ -1,0 +1,15 @@
+//! GPU tests (lavapipe where there is no GPU): every kernel against its CPU twin, frames, tiling, refinement, moving objects and the embedded pass. One binary, one device for all.
+
+#[path = "../support/mod.rs"]
+mod support;
+
+mod determinism;
+mod embed;
+mod frame;
+mod motion;
+mod primary_mft;
+mod refine;
+mod shadow_mft;
+mod shadow_tracers;
+mod smoke;
+mod tiles;
