@@ -1,4 +1,5 @@
 // Multi-frusta soft shadows: one 16-wide vector per 4x4 tile, lane = pixel = frustum of 16 rays.
+// One kernel, long because traversal, culling, both leaf modes and suspension are its one job.
 // Dispatched by the shadow pass (src/gpu/shadow_tracer.rs); CPU twin: src/reference/shadow_mft.rs.
 
 #import shared/bvh

@@ -1,4 +1,5 @@
-//! Every struct the CPU and the GPU share, in one place.
+//! Every struct the CPU and the GPU share, in one place (one concept; long because the
+//! naga layout checks of every struct live beside them).
 //!
 //! Each is `#[repr(C)]` + [`bytemuck::Pod`] with a compile-time size check; its
 //! WGSL twin in `shaders/shared/` has the same name and member names, and a

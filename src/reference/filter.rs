@@ -1,5 +1,5 @@
 //! The 4×4 discontinuity filter, CPU twin of `shaders/filter.wgsl` (its uniform and
-//! constants: [`crate::contract::filter`]).
+//! constants: [`crate::contract::filter`]). One concept: the twin and, below it, its tests.
 //!
 //! Pixel `(x, y)` traced the 16 shadow rays of sample set
 //! `(x mod 4) + 4·(y mod 4)`, so any 4×4 window holds all 16 sets — 256 light

@@ -1,4 +1,5 @@
-//! CPU twin of the multi-frusta shadow kernel (`shaders/shadow_mft.wgsl`):
+//! CPU twin of the multi-frusta shadow kernel (`shaders/shadow_mft.wgsl`), and only that
+//! (long because the kernel is: one file, one kernel, read side by side with it):
 //! the same 16-lane vector per 4×4 tile, the same culling, the same per-ray
 //! arithmetic and the same traversal order, one lane at a time. It is the
 //! kernel's test oracle (bit-exact where the GPU does not fuse multiply-adds)

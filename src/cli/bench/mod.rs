@@ -1,63 +1,33 @@
 //! `penumbra bench`: shadow-pass GPU times of every tracer on a set of scenes,
 //! the speedup of multi-frusta tracing over each baseline taken in the same run,
 //! and the paper's Table-1 counters with their reductions.
+//!
+//! `cases.rs` is the scene catalogue, `report.rs` the figures and how they print.
 
-use std::path::{Path, PathBuf};
+mod cases;
+mod report;
+
+use std::path::PathBuf;
 
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::contract::layout::GBufferTexel;
 use penumbra::gpu::MotionSettings;
-use penumbra::gpu::animate::{AnimationReport, animate_instance, default_moving_instance};
+use penumbra::gpu::animate::{animate_instance, default_moving_instance};
 use penumbra::gpu::{
     FrameSettings, GpuContext, GpuOptions, GpuScene, GpuTimer, PrimaryPass, PrimaryTracer, Renderer,
     RendererOptions, Tracer, empty_storage_buffer,
 };
 use penumbra::pass_inputs::{RAY_OFFSET_FRACTION, camera_params};
-use penumbra::reference::counters::Counters;
 use penumbra::reference::shadow_per_ray::MASK_SKY;
 use penumbra::scene::Scene;
 use penumbra::scene::view::View;
-use penumbra::{Error, Result, assets};
-use serde::Serialize;
+use penumbra::{Error, Result};
 
 use super::BvhArgs;
 use super::parse_size;
 use super::render::VectorArg;
-
-/// Views for the scenes of `../shared/scenes/` (their README's "views that give
-/// interesting soft shadows"), by file name: `(file, view name, view JSON)`.
-const SHARED_VIEWS: &[(&str, &str, &str)] = &[
-    (
-        "sponza.gltf",
-        "sunlit atrium",
-        include_str!("../../assets/views/sponza-atrium.json"),
-    ),
-    (
-        "sponza.gltf",
-        "columns",
-        include_str!("../../assets/views/sponza-columns.json"),
-    ),
-    (
-        "cornell_box.gltf",
-        "luminaire",
-        include_str!("../../assets/views/cornell-box.json"),
-    ),
-    (
-        "stanford-bunny.gltf",
-        "ground",
-        include_str!("../../assets/views/bunny.json"),
-    ),
-    (
-        "duck.gltf",
-        "ground",
-        include_str!("../../assets/views/duck.json"),
-    ),
-    (
-        "2CylinderEngine.glb",
-        "above",
-        include_str!("../../assets/views/engine.json"),
-    ),
-];
+use cases::cases;
+use report::*;
 
 /// Arguments of `penumbra bench`.
 #[derive(Debug, clap::Args)]
@@ -118,232 +88,6 @@ fn parse_tracer(s: &str) -> std::result::Result<Tracer, String> {
         Tracer::Reference { .. } => Err("bench compares 16-ray tracers: mft, packet, per-ray".into()),
         t => Ok(t),
     }
-}
-
-/// One scene and view to bench.
-struct Case {
-    name: String,
-    view_name: String,
-    scene: Scene,
-    view: View,
-}
-
-/// One tracer's figures in one case.
-#[derive(Debug, Serialize)]
-struct TracerResult {
-    tracer: String,
-    shadow_ms: Vec<f64>,
-    shadow_ms_min: f64,
-    shadow_ms_median: f64,
-    mrays_per_s: f64,
-    /// MFT's median speedup over this tracer (1 for MFT itself).
-    mft_speedup: f64,
-    counters: Option<Counters>,
-}
-
-/// One primary tracer's figures in one case.
-#[derive(Debug, Serialize)]
-struct PrimaryResult {
-    tracer: String,
-    primary_ms: Vec<f64>,
-    primary_ms_min: f64,
-    primary_ms_median: f64,
-    /// MFT primary's median speedup over this tracer.
-    mft_speedup: f64,
-    counters: Option<Counters>,
-    /// Pixels whose vectors ran out of loop iterations (MFT only); then it has no times.
-    ran_out_pixels: u32,
-}
-
-/// The moving-object case: CPU milliseconds per frame.
-#[derive(Debug, Serialize)]
-struct AnimationResult {
-    instance: u32,
-    instance_triangles: usize,
-    frames: usize,
-    refit_frames: usize,
-    refit_ms_mean: f64,
-    rebuild_frames: usize,
-    rebuild_ms_mean: f64,
-    upload_ms_mean: f64,
-    bytes_per_frame_mean: f64,
-}
-
-impl AnimationResult {
-    fn of(r: &AnimationReport) -> AnimationResult {
-        let mean = |v: Vec<f64>| {
-            if v.is_empty() {
-                0.0
-            } else {
-                v.iter().sum::<f64>() / v.len() as f64
-            }
-        };
-        let refits: Vec<f64> = r
-            .frames
-            .iter()
-            .filter(|f| !f.update.rebuilt)
-            .map(|f| f.update.bvh_ms)
-            .collect();
-        let rebuilds: Vec<f64> = r
-            .frames
-            .iter()
-            .filter(|f| f.update.rebuilt)
-            .map(|f| f.update.bvh_ms)
-            .collect();
-        AnimationResult {
-            instance: r.instance,
-            instance_triangles: r.instance_triangles,
-            frames: r.frames.len(),
-            refit_frames: refits.len(),
-            refit_ms_mean: mean(refits),
-            rebuild_frames: rebuilds.len(),
-            rebuild_ms_mean: mean(rebuilds),
-            upload_ms_mean: mean(r.frames.iter().map(|f| f.update.upload_ms).collect()),
-            bytes_per_frame_mean: mean(r.frames.iter().map(|f| f.update.bytes_uploaded as f64).collect()),
-        }
-    }
-}
-
-/// One case's figures.
-#[derive(Debug, Serialize)]
-struct CaseResult {
-    scene: String,
-    view: String,
-    triangles: usize,
-    leaf_size: u32,
-    bvh_nodes: usize,
-    width: u32,
-    height: u32,
-    shadow_rays: u64,
-    primary_ms_median: f64,
-    primary: Vec<PrimaryResult>,
-    tracers: Vec<TracerResult>,
-    /// The moving-object case, when the scene has an object to move.
-    animation: Option<AnimationResult>,
-    /// Counter reductions of MFT against the packet tracer (packet / MFT).
-    reductions_vs_packet: Option<Reductions>,
-}
-
-/// Packet counts over MFT counts, as Table 1 reports them.
-#[derive(Debug, Serialize)]
-struct Reductions {
-    triangles_accessed: f64,
-    triangles_after_culling: f64,
-    box_tests: f64,
-    triangle_tests: f64,
-}
-
-/// Everything a bench run measured.
-#[derive(Debug, Serialize)]
-struct BenchReport {
-    adapter: String,
-    driver: String,
-    vector: String,
-    runs: u32,
-    cases: Vec<CaseResult>,
-}
-
-fn median(v: &[f64]) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let n = s.len();
-    if n == 0 {
-        f64::NAN
-    } else if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        (s[n / 2 - 1] + s[n / 2]) / 2.0
-    }
-}
-
-fn ratio(a: u64, b: u64) -> f64 {
-    if b == 0 { f64::NAN } else { a as f64 / b as f64 }
-}
-
-/// The cases to bench: the scenes named, or the built-ins plus the shared scenes found.
-fn cases(args: &BenchArgs) -> Result<Vec<Case>> {
-    let mut out = Vec::new();
-    let forced_view = args.view.as_deref().map(View::load).transpose()?;
-    let mut push = |name: String, scene: Scene, views: Vec<(String, View)>| {
-        let views = match (forced_view, &args.view) {
-            (Some(view), Some(path)) => vec![(path.display().to_string(), view)],
-            _ => views,
-        };
-        for (view_name, view) in views {
-            let mut scene = scene.clone();
-            if let Some(y) = view.ground_y {
-                scene.add_ground_plane(y);
-            }
-            // As render does (scene_arg::load_scene_and_view): far scenes are traced at the origin.
-            let mut view = view;
-            super::scene_arg::recentre(&mut scene, &mut view);
-            out.push(Case {
-                name: name.clone(),
-                view_name,
-                scene,
-                view,
-            });
-        }
-    };
-    let builtin = |name: &str| assets::embedded_scene(name);
-    let shared_views = |path: &Path, scene: &Scene| -> Result<Vec<(String, View)>> {
-        let file = path.file_name().and_then(|f| f.to_str()).unwrap_or_default();
-        let known: Vec<(String, View)> = SHARED_VIEWS
-            .iter()
-            .filter(|(f, _, _)| *f == file)
-            .map(|(_, name, json)| Ok(((*name).to_owned(), View::from_json(json, Path::new(name))?)))
-            .collect::<Result<_>>()?;
-        Ok(if known.is_empty() {
-            vec![(
-                "default".to_owned(),
-                View::default_for(&scene.bounds(), scene.camera),
-            )]
-        } else {
-            known
-        })
-    };
-    if args.scenes.is_empty() {
-        for s in assets::EMBEDDED_SCENES {
-            let scene = Scene::from_bytes(s.glb, Path::new(s.file_name))?;
-            push(s.name.to_owned(), scene, vec![("built-in".to_owned(), s.view())]);
-        }
-        let mut files: Vec<PathBuf> = std::fs::read_dir(&args.shared_scenes)
-            .into_iter()
-            .flatten()
-            .flatten()
-            .filter(|d| d.path().is_dir())
-            .flat_map(|d| std::fs::read_dir(d.path()).into_iter().flatten().flatten())
-            .map(|e| e.path())
-            .filter(|p| matches!(p.extension().and_then(|e| e.to_str()), Some("gltf" | "glb")))
-            .collect();
-        files.sort();
-        if files.is_empty() {
-            eprintln!(
-                "note: no scenes under {}; benching the built-in scenes only",
-                args.shared_scenes.display()
-            );
-        }
-        for path in files {
-            let scene = Scene::load(&path)?;
-            let views = shared_views(&path, &scene)?;
-            push(path.display().to_string(), scene, views);
-        }
-    } else {
-        for arg in &args.scenes {
-            match (arg.exists(), arg.to_str().and_then(builtin)) {
-                (false, Some(s)) => {
-                    let scene = Scene::from_bytes(s.glb, Path::new(s.file_name))?;
-                    push(s.name.to_owned(), scene, vec![("built-in".to_owned(), s.view())]);
-                }
-                _ => {
-                    let scene = Scene::load(arg)?;
-                    let views = shared_views(arg, &scene)?;
-                    push(arg.display().to_string(), scene, views);
-                }
-            }
-        }
-    }
-    Ok(out)
 }
 
 /// Runs the benchmark and prints its table.
@@ -605,95 +349,4 @@ fn bench_primary(
         p.mft_speedup = p.primary_ms_median / mft;
     }
     Ok(out)
-}
-
-fn print_case(r: &CaseResult) {
-    println!();
-    println!(
-        "{} — {} — {} tris, leaf ≤ {}, {} nodes, {}x{}, {:.2} M shadow rays, primary {:.1} ms",
-        r.scene,
-        r.view,
-        r.triangles,
-        r.leaf_size,
-        r.bvh_nodes,
-        r.width,
-        r.height,
-        r.shadow_rays as f64 / 1e6,
-        r.primary_ms_median
-    );
-    println!(
-        "  {:<8} {:>10} {:>10} {:>8} {:>9} {:>11} {:>11} {:>11} {:>11}",
-        "tracer", "min ms", "median ms", "Mrays/s", "MFT is", "tris", "+culling", "AABB tests", "tri tests"
-    );
-    for t in &r.tracers {
-        let c = |f: fn(&Counters) -> u64| {
-            t.counters
-                .map_or("-".to_owned(), |c| format!("{:.0}K", f(&c) as f64 / 1e3))
-        };
-        println!(
-            "  {:<8} {:>10.1} {:>10.1} {:>8.2} {:>8.2}x {:>11} {:>11} {:>11} {:>11}",
-            t.tracer,
-            t.shadow_ms_min,
-            t.shadow_ms_median,
-            t.mrays_per_s,
-            t.mft_speedup,
-            c(|c| c.triangles_accessed),
-            c(|c| c.triangles_after_culling),
-            c(|c| c.box_tests),
-            c(|c| c.triangle_tests),
-        );
-    }
-    println!(
-        "  {:<8} {:>10} {:>10} {:>8} {:>9} {:>11} {:>11} {:>11} {:>11}",
-        "primary", "min ms", "median ms", "", "MFT is", "tris", "+culling", "AABB tests", "tri tests"
-    );
-    for p in &r.primary {
-        if p.ran_out_pixels > 0 {
-            println!(
-                "  {:<8} the vectors of {} pixels ran out of loop iterations at this size (not timed)",
-                p.tracer, p.ran_out_pixels
-            );
-            continue;
-        }
-        // Per-ray counts are single-ray tests; Table 1 compares 16-wide ones.
-        let scale = if p.tracer == "mft" { 1.0 } else { 16.0 };
-        let c = |f: fn(&Counters) -> u64| {
-            p.counters
-                .map_or("-".to_owned(), |c| format!("{:.0}K", f(&c) as f64 / scale / 1e3))
-        };
-        println!(
-            "  {:<8} {:>10.1} {:>10.1} {:>8} {:>8.2}x {:>11} {:>11} {:>11} {:>11}",
-            p.tracer,
-            p.primary_ms_min,
-            p.primary_ms_median,
-            "",
-            p.mft_speedup,
-            c(|c| c.triangles_accessed),
-            c(|c| c.triangles_after_culling),
-            c(|c| c.box_tests),
-            c(|c| c.triangle_tests),
-        );
-    }
-    println!("  (per-ray primary counts shown /16, as 16-wide equivalents)");
-    if let Some(a) = &r.animation {
-        println!(
-            "  moving instance {} ({} tris), {} frames: refit {} x {:.3} ms, rebuild {} x {:.2} ms, \
-             upload {:.3} ms and {:.0} KB per frame (CPU)",
-            a.instance,
-            a.instance_triangles,
-            a.frames,
-            a.refit_frames,
-            a.refit_ms_mean,
-            a.rebuild_frames,
-            a.rebuild_ms_mean,
-            a.upload_ms_mean,
-            a.bytes_per_frame_mean / 1e3
-        );
-    }
-    if let Some(red) = &r.reductions_vs_packet {
-        println!(
-            "  packet/MFT: tris {:.2}x, +culling {:.2}x, AABB tests {:.2}x, triangle tests {:.2}x",
-            red.triangles_accessed, red.triangles_after_culling, red.box_tests, red.triangle_tests
-        );
-    }
 }

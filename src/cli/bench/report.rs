@@ -1,0 +1,229 @@
+//! The figures `penumbra bench` reports (printed and as JSON) and their printing.
+
+use penumbra::gpu::animate::AnimationReport;
+use penumbra::reference::counters::Counters;
+use serde::Serialize;
+
+/// One tracer's figures in one case.
+#[derive(Debug, Serialize)]
+pub(super) struct TracerResult {
+    pub(super) tracer: String,
+    pub(super) shadow_ms: Vec<f64>,
+    pub(super) shadow_ms_min: f64,
+    pub(super) shadow_ms_median: f64,
+    pub(super) mrays_per_s: f64,
+    /// MFT's median speedup over this tracer (1 for MFT itself).
+    pub(super) mft_speedup: f64,
+    pub(super) counters: Option<Counters>,
+}
+
+/// One primary tracer's figures in one case.
+#[derive(Debug, Serialize)]
+pub(super) struct PrimaryResult {
+    pub(super) tracer: String,
+    pub(super) primary_ms: Vec<f64>,
+    pub(super) primary_ms_min: f64,
+    pub(super) primary_ms_median: f64,
+    /// MFT primary's median speedup over this tracer.
+    pub(super) mft_speedup: f64,
+    pub(super) counters: Option<Counters>,
+    /// Pixels whose vectors ran out of loop iterations (MFT only); then it has no times.
+    pub(super) ran_out_pixels: u32,
+}
+
+/// The moving-object case: CPU milliseconds per frame.
+#[derive(Debug, Serialize)]
+pub(super) struct AnimationResult {
+    pub(super) instance: u32,
+    pub(super) instance_triangles: usize,
+    pub(super) frames: usize,
+    pub(super) refit_frames: usize,
+    pub(super) refit_ms_mean: f64,
+    pub(super) rebuild_frames: usize,
+    pub(super) rebuild_ms_mean: f64,
+    pub(super) upload_ms_mean: f64,
+    pub(super) bytes_per_frame_mean: f64,
+}
+
+impl AnimationResult {
+    pub(super) fn of(r: &AnimationReport) -> AnimationResult {
+        let mean = |v: Vec<f64>| {
+            if v.is_empty() {
+                0.0
+            } else {
+                v.iter().sum::<f64>() / v.len() as f64
+            }
+        };
+        let refits: Vec<f64> = r
+            .frames
+            .iter()
+            .filter(|f| !f.update.rebuilt)
+            .map(|f| f.update.bvh_ms)
+            .collect();
+        let rebuilds: Vec<f64> = r
+            .frames
+            .iter()
+            .filter(|f| f.update.rebuilt)
+            .map(|f| f.update.bvh_ms)
+            .collect();
+        AnimationResult {
+            instance: r.instance,
+            instance_triangles: r.instance_triangles,
+            frames: r.frames.len(),
+            refit_frames: refits.len(),
+            refit_ms_mean: mean(refits),
+            rebuild_frames: rebuilds.len(),
+            rebuild_ms_mean: mean(rebuilds),
+            upload_ms_mean: mean(r.frames.iter().map(|f| f.update.upload_ms).collect()),
+            bytes_per_frame_mean: mean(r.frames.iter().map(|f| f.update.bytes_uploaded as f64).collect()),
+        }
+    }
+}
+
+/// One case's figures.
+#[derive(Debug, Serialize)]
+pub(super) struct CaseResult {
+    pub(super) scene: String,
+    pub(super) view: String,
+    pub(super) triangles: usize,
+    pub(super) leaf_size: u32,
+    pub(super) bvh_nodes: usize,
+    pub(super) width: u32,
+    pub(super) height: u32,
+    pub(super) shadow_rays: u64,
+    pub(super) primary_ms_median: f64,
+    pub(super) primary: Vec<PrimaryResult>,
+    pub(super) tracers: Vec<TracerResult>,
+    /// The moving-object case, when the scene has an object to move.
+    pub(super) animation: Option<AnimationResult>,
+    /// Counter reductions of MFT against the packet tracer (packet / MFT).
+    pub(super) reductions_vs_packet: Option<Reductions>,
+}
+
+/// Packet counts over MFT counts, as Table 1 reports them.
+#[derive(Debug, Serialize)]
+pub(super) struct Reductions {
+    pub(super) triangles_accessed: f64,
+    pub(super) triangles_after_culling: f64,
+    pub(super) box_tests: f64,
+    pub(super) triangle_tests: f64,
+}
+
+/// Everything a bench run measured.
+#[derive(Debug, Serialize)]
+pub(super) struct BenchReport {
+    pub(super) adapter: String,
+    pub(super) driver: String,
+    pub(super) vector: String,
+    pub(super) runs: u32,
+    pub(super) cases: Vec<CaseResult>,
+}
+
+pub(super) fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let n = s.len();
+    if n == 0 {
+        f64::NAN
+    } else if n % 2 == 1 {
+        s[n / 2]
+    } else {
+        (s[n / 2 - 1] + s[n / 2]) / 2.0
+    }
+}
+
+pub(super) fn ratio(a: u64, b: u64) -> f64 {
+    if b == 0 { f64::NAN } else { a as f64 / b as f64 }
+}
+
+/// The cases to bench: the scenes named, or the built-ins plus the shared scenes found.
+pub(super) fn print_case(r: &CaseResult) {
+    println!();
+    println!(
+        "{} — {} — {} tris, leaf ≤ {}, {} nodes, {}x{}, {:.2} M shadow rays, primary {:.1} ms",
+        r.scene,
+        r.view,
+        r.triangles,
+        r.leaf_size,
+        r.bvh_nodes,
+        r.width,
+        r.height,
+        r.shadow_rays as f64 / 1e6,
+        r.primary_ms_median
+    );
+    println!(
+        "  {:<8} {:>10} {:>10} {:>8} {:>9} {:>11} {:>11} {:>11} {:>11}",
+        "tracer", "min ms", "median ms", "Mrays/s", "MFT is", "tris", "+culling", "AABB tests", "tri tests"
+    );
+    for t in &r.tracers {
+        let c = |f: fn(&Counters) -> u64| {
+            t.counters
+                .map_or("-".to_owned(), |c| format!("{:.0}K", f(&c) as f64 / 1e3))
+        };
+        println!(
+            "  {:<8} {:>10.1} {:>10.1} {:>8.2} {:>8.2}x {:>11} {:>11} {:>11} {:>11}",
+            t.tracer,
+            t.shadow_ms_min,
+            t.shadow_ms_median,
+            t.mrays_per_s,
+            t.mft_speedup,
+            c(|c| c.triangles_accessed),
+            c(|c| c.triangles_after_culling),
+            c(|c| c.box_tests),
+            c(|c| c.triangle_tests),
+        );
+    }
+    println!(
+        "  {:<8} {:>10} {:>10} {:>8} {:>9} {:>11} {:>11} {:>11} {:>11}",
+        "primary", "min ms", "median ms", "", "MFT is", "tris", "+culling", "AABB tests", "tri tests"
+    );
+    for p in &r.primary {
+        if p.ran_out_pixels > 0 {
+            println!(
+                "  {:<8} the vectors of {} pixels ran out of loop iterations at this size (not timed)",
+                p.tracer, p.ran_out_pixels
+            );
+            continue;
+        }
+        // Per-ray counts are single-ray tests; Table 1 compares 16-wide ones.
+        let scale = if p.tracer == "mft" { 1.0 } else { 16.0 };
+        let c = |f: fn(&Counters) -> u64| {
+            p.counters
+                .map_or("-".to_owned(), |c| format!("{:.0}K", f(&c) as f64 / scale / 1e3))
+        };
+        println!(
+            "  {:<8} {:>10.1} {:>10.1} {:>8} {:>8.2}x {:>11} {:>11} {:>11} {:>11}",
+            p.tracer,
+            p.primary_ms_min,
+            p.primary_ms_median,
+            "",
+            p.mft_speedup,
+            c(|c| c.triangles_accessed),
+            c(|c| c.triangles_after_culling),
+            c(|c| c.box_tests),
+            c(|c| c.triangle_tests),
+        );
+    }
+    println!("  (per-ray primary counts shown /16, as 16-wide equivalents)");
+    if let Some(a) = &r.animation {
+        println!(
+            "  moving instance {} ({} tris), {} frames: refit {} x {:.3} ms, rebuild {} x {:.2} ms, \
+             upload {:.3} ms and {:.0} KB per frame (CPU)",
+            a.instance,
+            a.instance_triangles,
+            a.frames,
+            a.refit_frames,
+            a.refit_ms_mean,
+            a.rebuild_frames,
+            a.rebuild_ms_mean,
+            a.upload_ms_mean,
+            a.bytes_per_frame_mean / 1e3
+        );
+    }
+    if let Some(red) = &r.reductions_vs_packet {
+        println!(
+            "  packet/MFT: tris {:.2}x, +culling {:.2}x, AABB tests {:.2}x, triangle tests {:.2}x",
+            red.triangles_accessed, red.triangles_after_culling, red.box_tests, red.triangle_tests
+        );
+    }
+}
