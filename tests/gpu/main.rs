@@ -5,7 +5,9 @@ mod support;
 
 mod determinism;
 mod embed;
+mod far_from_origin;
 mod frame;
+mod loop_limit;
 mod motion;
 mod primary_mft;
 mod refine;
