@@ -17,7 +17,7 @@ pub const FILTER_KERNEL: &str = "filter";
 /// The kernel's workgroup is `WORKGROUP_SIZE × WORKGROUP_SIZE`; dispatch
 /// `ceil(width / 8) × ceil(height / 8)` workgroups. Equal to `WG_SIZE` in the WGSL
 /// (a test checks).
-pub const WORKGROUP_SIZE: u32 = 8;
+pub const WORKGROUP_SIZE: u32 = super::PIXEL_GROUP;
 
 /// The filter's settings, 32 bytes; also the kernel's uniform (WGSL
 /// `FilterParams`, same member names; a test compares the layouts).

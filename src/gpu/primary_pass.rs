@@ -16,10 +16,10 @@
 
 use super::kernel::{Checks, Kernel, buffer, uniform_buffer};
 use super::{GpuContext, GpuScene, GpuTimer, VectorVariant, read_buffer};
-use crate::contract::ITERATION_BUDGET;
 use crate::contract::counters::{Counters, STATUS_WORDS, WORD_LOOP_CUT, WORD_STATUS};
 use crate::contract::layout::CameraParams;
 use crate::contract::primary::BLOCK;
+use crate::contract::{ITERATION_BUDGET, PIXEL_GROUP};
 use crate::{Error, Result};
 
 /// Which kernel traces the camera rays.
@@ -191,7 +191,11 @@ impl PrimaryPass {
     /// Workgroups of a `width`×`height` dispatch, or an error naming the device's limit.
     pub fn workgroups(&self, ctx: &GpuContext, width: u32, height: u32) -> Result<(u32, u32)> {
         let (x, y, unit) = match self.tracer {
-            PrimaryTracer::PerRay => (width.div_ceil(8), height.div_ceil(8), "8x8 pixels"),
+            PrimaryTracer::PerRay => (
+                width.div_ceil(PIXEL_GROUP),
+                height.div_ceil(PIXEL_GROUP),
+                "8x8 pixels",
+            ),
             PrimaryTracer::Mft => (
                 width.div_ceil(BLOCK).div_ceil(self.vectors_per_workgroup),
                 height.div_ceil(BLOCK),

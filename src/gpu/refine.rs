@@ -16,6 +16,7 @@ use super::kernel::{Checks, Kernel, buffer, uniform_buffer};
 use super::pixel_buffers::PixelBuffers;
 use super::{GpuContext, GpuScene, GpuTimer, ShadowImage, ShadowTracer, empty_storage_buffer, read_buffer};
 use crate::contract::layout::{GBufferTexel, RefineParams, ShadowParams};
+use crate::contract::{LINE_GROUP, PIXEL_GROUP};
 use crate::sampling::SETS;
 use crate::{Error, Result};
 
@@ -92,7 +93,7 @@ impl Refinement {
             ],
         )?;
         let writes = timer.pass_writes("refine");
-        let groups = (width.div_ceil(8), height.div_ceil(8));
+        let groups = (width.div_ceil(PIXEL_GROUP), height.div_ceil(PIXEL_GROUP));
         self.select
             .record(&mut encoder, "refine select", &bind, writes, groups);
         ctx.queue.submit([encoder.finish()]);
@@ -159,7 +160,7 @@ impl Refinement {
             ],
         )?;
         let writes = timer.pass_writes("refine");
-        let groups = (w.div_ceil(8), h.div_ceil(8));
+        let groups = (w.div_ceil(PIXEL_GROUP), h.div_ceil(PIXEL_GROUP));
         self.gather
             .record(&mut encoder, "refine gather", &bind, writes, groups);
         ctx.queue.submit([encoder.finish()]);
@@ -196,7 +197,7 @@ impl Refinement {
             "refine resolve",
             &bind,
             writes,
-            (params.slots.div_ceil(64), 1),
+            (params.slots.div_ceil(LINE_GROUP), 1),
         );
         ctx.queue.submit([encoder.finish()]);
         Ok(())

@@ -13,11 +13,11 @@ use super::{
     Frame, FrameSettings, GpuContext, GpuScene, GpuTimer, LeafMode, Phase, RendererOptions, ShadowImage,
     Tracer, TracerOptions, VectorVariant, read_buffer, storage_buffer,
 };
-use crate::contract::ITERATION_BUDGET;
 use crate::contract::filter::FilterParams;
 use crate::contract::layout::{CameraParams, GBufferTexel};
 use crate::contract::shade::shade_params;
 use crate::contract::shadow::shadow_params;
+use crate::contract::{ITERATION_BUDGET, PIXEL_GROUP};
 use crate::pass_inputs::{RAY_OFFSET_FRACTION, camera_params, tile_camera};
 use crate::sampling;
 use crate::scene::view::View;
@@ -224,7 +224,7 @@ impl Renderer {
         let camera_buf = uniform_buffer(ctx, "camera", camera);
         let shade_buf = uniform_buffer(ctx, "shade params", &shade_params(&view.light, w, h));
         let mut timer = GpuTimer::new(ctx, TIMER_CAPACITY);
-        let groups = (w.div_ceil(8), h.div_ceil(8));
+        let groups = (w.div_ceil(PIXEL_GROUP), h.div_ceil(PIXEL_GROUP));
         check_groups(ctx, groups)?;
 
         // One primary dispatch, timed as "primary", waited for.

@@ -10,6 +10,7 @@ use super::kernel::{Checks, Kernel, buffer, uniform_buffer_on};
 use super::pixel_buffers::PixelBuffers;
 use super::refine::{RefineBuffers, Refinement};
 use super::{GpuContext, GpuScene, GpuTimer, ShadowTracer, Tracer, TracerOptions};
+use crate::contract::PIXEL_GROUP;
 use crate::contract::filter::{FILTER_KERNEL, FilterParams};
 use crate::contract::layout::ShadowParams;
 use crate::contract::refine::selection_params;
@@ -75,7 +76,10 @@ impl ShadowStages {
         filter: Option<&FilterParams>,
         mut timer: Option<&mut GpuTimer>,
     ) -> Result<&'p wgpu::Buffer> {
-        let groups = (pixels.size.0.div_ceil(8), pixels.size.1.div_ceil(8));
+        let groups = (
+            pixels.size.0.div_ceil(PIXEL_GROUP),
+            pixels.size.1.div_ceil(PIXEL_GROUP),
+        );
         let (bind, label) = match (self.stage, &pixels.brdf) {
             (VisibilityStage::Shade, Some(brdf)) => (
                 self.visibility.bind(

@@ -11,6 +11,7 @@
 
 use super::kernel::{Checks, Kernel, buffer, uniform_buffer_on};
 use super::{GpuContext, GpuScene, GpuTimer, LeafMode, Tracer, TracerOptions, VectorVariant, read_buffer};
+use crate::contract::LINE_GROUP;
 use crate::contract::counters::{Counters, STATUS_WORDS};
 use crate::contract::counters::{WORD_LOOP_CUT, WORD_STATUS};
 use crate::contract::layout::ShadowParams;
@@ -56,8 +57,6 @@ pub struct ShadowTracer {
     vectors_per_workgroup: u32,
 }
 
-/// Invocations per workgroup of the per-ray kernel.
-const PER_RAY_WG_SIZE: u32 = 64;
 /// Workgroups along x of a per-ray dispatch (the rest go along y).
 const PER_RAY_GROUPS_X: u32 = 4096;
 
@@ -165,7 +164,7 @@ impl ShadowTracer {
         if self.tracer.uses_vector() {
             (units.div_ceil(self.vectors_per_workgroup), 1)
         } else {
-            let groups = (units * self.tracer.rays_per_pixel()).div_ceil(PER_RAY_WG_SIZE);
+            let groups = (units * self.tracer.rays_per_pixel()).div_ceil(LINE_GROUP);
             (groups.min(PER_RAY_GROUPS_X), groups.div_ceil(PER_RAY_GROUPS_X))
         }
     }

@@ -57,15 +57,12 @@ use glam::Vec3;
 use super::kernel::{Checks, Kernel, buffer, texture, uniform_buffer_on};
 use super::shadow_stages::{ShadowStages, VisibilityStage};
 use super::{GpuContext, GpuScene, LeafMode, ShadowImage, TracerOptions, VectorVariant};
-use crate::contract::ITERATION_BUDGET;
 use crate::contract::filter::FilterParams;
 use crate::contract::layout::{ImageSize, SurfaceParams};
 use crate::contract::shadow::shadow_params;
+use crate::contract::{ITERATION_BUDGET, PIXEL_GROUP};
 use crate::pass_inputs::RAY_OFFSET_FRACTION;
 use crate::{Error, Result, sampling};
-
-/// Workgroups are 8×8 pixels in the per-pixel kernels.
-const PIXEL_GROUP: u32 = 8;
 
 /// How the embedded pass traces and filters. Rays per pixel are fixed at 16 (one sample
 /// set of the 256-point pattern; the filter's 4-pixel box gathers all 256).
