@@ -27,8 +27,6 @@ const SAMPLE_TILES_X: u32 = 256;
 
 /// The buffers of one frame (or tile) the refinement reads and writes.
 pub struct RefineBuffers<'a> {
-    /// Width and height of the frame in pixels.
-    pub size: (u32, u32),
     /// `FilterParams` uniform for `refine_select`: the filter's, with the refinement's
     /// visibility tolerance ([`crate::contract::refine::selection_params`]).
     pub selection_params: &'a wgpu::Buffer,
@@ -75,7 +73,7 @@ impl Refinement {
         timer: &mut GpuTimer,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<Vec<u32>> {
-        let (width, height) = b.size;
+        let (width, height) = b.pixels.size;
         let pixels = u64::from(width) * u64::from(height);
         let rw = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
         let list = empty_storage_buffer(ctx, "refine list", (2 + pixels) * 4, rw)?;

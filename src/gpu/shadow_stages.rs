@@ -157,7 +157,6 @@ impl ShadowStages {
         };
         let selection = uniform_buffer_on(&ctx.device, "refine selection params", &selection_params(filter));
         let buffers = RefineBuffers {
-            size: (filter.width, filter.height),
             selection_params: &selection,
             shadow_params: shadow,
             shade_params,
