@@ -17,7 +17,7 @@ use std::time::Instant;
 use glam::Vec3;
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::gpu::{FrameSettings, GpuContext, GpuOptions, GpuScene, Renderer, RendererOptions, Tracer};
-use penumbra::reference::shadow_per_ray::visibility;
+use penumbra::reference::visibility::visibility;
 use penumbra::scene::Scene;
 use penumbra::scene::view::View;
 

@@ -11,7 +11,8 @@ use std::path::PathBuf;
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::contract::layout::GBufferTexel;
 use penumbra::gpu::{
-    GpuContext, GpuOptions, GpuScene, GpuTimer, PrimaryPass, PrimaryTracer, empty_storage_buffer,
+    GpuContext, GpuOptions, GpuScene, GpuTimer, PrimaryOptions, PrimaryPass, PrimaryTracer,
+    empty_storage_buffer,
 };
 use penumbra::pass_inputs::{RAY_OFFSET_FRACTION, camera_params};
 use penumbra::scene::Scene;
@@ -55,17 +56,26 @@ fn main() -> penumbra::Result<()> {
     let tracers = [PrimaryTracer::PerRay, PrimaryTracer::Mft];
     let passes = tracers
         .iter()
-        .map(|&t| PrimaryPass::new(&ctx, t, None, false))
+        .map(|&t| {
+            PrimaryPass::new(
+                &ctx,
+                &PrimaryOptions {
+                    tracer: t,
+                    ..PrimaryOptions::default()
+                },
+            )
+        })
         .collect::<penumbra::Result<Vec<_>>>()?;
     for pass in &passes {
-        pass.run(&ctx, &gpu_scene, &cam, &gbuffer, None)?; // warm-up: lavapipe compiles here
+        pass.run(&ctx, &gpu_scene, &cam, &gbuffer, None)?.check()?; // warm-up: lavapipe compiles here
     }
     // Interleaved, so that both tracers see the same load on a shared machine.
     let mut ms = vec![Vec::new(); passes.len()];
     for _ in 0..runs {
         for (pass, ms) in passes.iter().zip(&mut ms) {
             let mut timer = GpuTimer::new(&ctx, 1);
-            pass.run(&ctx, &gpu_scene, &cam, &gbuffer, Some(&mut timer))?;
+            pass.run(&ctx, &gpu_scene, &cam, &gbuffer, Some(&mut timer))?
+                .check()?;
             ms.extend(timer.read(&ctx)?.into_iter().map(|(_, t)| t));
         }
     }
@@ -75,9 +85,18 @@ fn main() -> penumbra::Result<()> {
         let all = ms.clone();
         ms.sort_by(f64::total_cmp);
         let (min, median) = (ms[0], ms[ms.len() / 2]);
-        let counted = PrimaryPass::new(&ctx, tracer, pass.variant(), true)?;
+        let counted = PrimaryPass::new(
+            &ctx,
+            &PrimaryOptions {
+                tracer,
+                variant: pass.variant(),
+                counters: true,
+                ..PrimaryOptions::default()
+            },
+        )?;
         let c = counted
             .run(&ctx, &gpu_scene, &cam, &gbuffer, None)?
+            .check()?
             .expect("counters compiled in");
         let variant = pass.variant().map_or("-".to_owned(), |v| v.to_string());
         println!(

@@ -1,10 +1,9 @@
 // 4×4 discontinuity filter: each pixel averages the values of the 4-pixel box centred on it, using only neighbours at a similar
 // depth, normal and visibility whose mirror image through the pixel is used too.
-// Dispatched by the filter pass after shading, ceil(width/8) × ceil(height/8) workgroups; its CPU twin is `penumbra::filter::filter_pixel`.
+// Dispatched by the filter pass after shading, ceil(width / PIXEL_GROUP) × ceil(height / PIXEL_GROUP) workgroups; CPU twin: src/reference/filter.rs.
 
 #import shared/filter_window
-
-const WG_SIZE: u32 = 8u;
+#import shared/groups
 
 @group(0) @binding(0) var<uniform> filter_params: FilterParams;
 // Per pixel, row-major, top row first: rgb = irradiance, a = visibility (filtered together).
@@ -15,7 +14,7 @@ const WG_SIZE: u32 = 8u;
 @group(0) @binding(3) var<storage, read> normal: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read_write> filtered: array<vec4<f32>>;
 
-@compute @workgroup_size(WG_SIZE, WG_SIZE)
+@compute @workgroup_size(PIXEL_GROUP, PIXEL_GROUP)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= filter_params.width || gid.y >= filter_params.height {
         return;

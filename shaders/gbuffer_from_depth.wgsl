@@ -1,7 +1,8 @@
 // G-buffer from a host's depth and normal textures: world position by unprojecting the depth.
 // Recorded by ShadowPass::record (src/gpu/embed/mod.rs) before the shadow pass; CPU twin: src/reference/gbuffer_from_surface.rs.
 
-#import shared/frame
+#import shared/groups
+#import shared/layout
 #import shared/surface
 
 @group(0) @binding(0) var<uniform> params: SurfaceParams;
@@ -15,7 +16,7 @@
 @group(0) @binding(5) var<storage, read_write> depth: array<f32>;
 @group(0) @binding(6) var<storage, read_write> normal: array<vec4<f32>>;
 
-@compute @workgroup_size(8, 8)
+@compute @workgroup_size(PIXEL_GROUP, PIXEL_GROUP)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= params.width || gid.y >= params.height {
         return;

@@ -3,8 +3,9 @@
 
 #import shared/bvh
 #import shared/counters
-#import shared/frame
+#import shared/groups
 #import shared/intersect
+#import shared/layout
 #import shared/primary
 
 @group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
@@ -17,7 +18,7 @@ fn hit_triangle(t: u32) -> BvhTriangle {
 
 // Pushes both children of a node: the stack holds at most depth + 1 entries.
 
-@compute @workgroup_size(8, 8)
+@compute @workgroup_size(PIXEL_GROUP, PIXEL_GROUP)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= camera.width || gid.y >= camera.height {
         return;

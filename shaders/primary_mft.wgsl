@@ -4,7 +4,7 @@
 #import shared/bvh
 #import shared/counters
 #import shared/descend
-#import shared/frame
+#import shared/layout
 #import shared/intersect
 #import shared/primary
 #import shared/vec16

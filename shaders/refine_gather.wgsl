@@ -2,13 +2,12 @@
 // listed (shared/refine: one 4×4 tile of copies of the pixel's G-buffer texel per pixel),
 // which the frame's own shadow tracer then traces like any image (step 3 is refine_resolve).
 // Tiles past the chunk's last slot get sky texels (no rays).
-// Dispatched by the renderer, ceil(width/8) × ceil(height/8) workgroups over the sample image.
-// CPU twin: penumbra::reference::refine::sample_image.
+// Dispatched by the renderer, ceil(width / PIXEL_GROUP) × ceil(height / PIXEL_GROUP) workgroups over the sample image.
+// CPU twin: src/reference/refine.rs (sample_image).
 
-#import shared/frame
+#import shared/groups
+#import shared/layout
 #import shared/refine
-
-const WG_SIZE: u32 = 8u;
 
 @group(0) @binding(0) var<uniform> params: RefineParams;
 @group(0) @binding(1) var<storage, read> gbuffer: array<GBufferTexel>;
@@ -17,7 +16,7 @@ const WG_SIZE: u32 = 8u;
 // The sample image, 4 tiles_x wide, row-major.
 @group(0) @binding(3) var<storage, read_write> samples: array<GBufferTexel>;
 
-@compute @workgroup_size(WG_SIZE, WG_SIZE)
+@compute @workgroup_size(PIXEL_GROUP, PIXEL_GROUP)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let width = 4u * params.tiles_x;
     let height = 4u * ((params.slots + params.tiles_x - 1u) / params.tiles_x);

@@ -2,13 +2,12 @@
 // each listed pixel of the chunk counts the blocked rays of its tile's 16 masks (its 256
 // light samples) and overwrites the filter's output with irradiance × (256 − blocked) / 256:
 // the whole interleaved pattern that the filter's window could not gather there.
-// Dispatched by the renderer, ceil(slots / 64) workgroups.
-// CPU twin: penumbra::reference::refine::resolve.
+// Dispatched by the renderer, ceil(slots / LINE_GROUP) workgroups.
+// CPU twin: src/reference/refine.rs (resolve).
 
-#import shared/frame
+#import shared/groups
+#import shared/layout
 #import shared/refine
-
-const WG_SIZE: u32 = 64u;
 
 @group(0) @binding(0) var<uniform> params: RefineParams;
 @group(0) @binding(1) var<uniform> shade: ShadeParams;
@@ -19,7 +18,7 @@ const WG_SIZE: u32 = 64u;
 // The filter's output; a listed pixel's value is replaced.
 @group(0) @binding(5) var<storage, read_write> filtered: array<vec4<f32>>;
 
-@compute @workgroup_size(WG_SIZE)
+@compute @workgroup_size(LINE_GROUP)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let slot = gid.x;
     if slot >= params.slots {

@@ -4,12 +4,11 @@
 // than the 16 sample sets there, or over a real change) or whose own 16 rays agree (the
 // window would blur a penumbra's edge into them).
 // refine_gather, the shadow tracer and refine_resolve then give each of them all 256 samples.
-// Dispatched by the renderer after the filter, ceil(width/8) × ceil(height/8) workgroups.
-// CPU twin: penumbra::reference::refine::needs_refinement.
+// Dispatched by the renderer after the filter, ceil(width / PIXEL_GROUP) × ceil(height / PIXEL_GROUP) workgroups.
+// CPU twin: src/reference/refine.rs (needs_refinement).
 
 #import shared/filter_window
-
-const WG_SIZE: u32 = 8u;
+#import shared/groups
 
 // The filter's parameters with the refinement's visibility tolerance (one ray: tighter than
 // the filter's), so a window is cut wherever a neighbour differs by more than one ray.
@@ -48,7 +47,7 @@ fn visibility_varies(x: u32, y: u32) -> bool {
     return false;
 }
 
-@compute @workgroup_size(WG_SIZE, WG_SIZE)
+@compute @workgroup_size(PIXEL_GROUP, PIXEL_GROUP)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= filter_params.width || gid.y >= filter_params.height {
         return;

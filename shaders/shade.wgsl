@@ -1,7 +1,8 @@
 // Shading: irradiance from the light centre times the visible fraction (filtered next), and albedo / pi.
 // Dispatched by the renderer before the filter; CPU twin: src/reference/shade.rs.
 
-#import shared/frame
+#import shared/groups
+#import shared/layout
 
 const PI: f32 = 3.14159265358979;
 // 0: masks hold 16 ray bits. Otherwise the reference tracer's count of blocked
@@ -18,7 +19,7 @@ override REFERENCE_RAYS: u32 = 0u;
 // Diffuse BRDF albedo / pi (rgb); radiance = brdf * filtered irradiance.
 @group(0) @binding(6) var<storage, read_write> brdf: array<vec4<f32>>;
 
-@compute @workgroup_size(8, 8)
+@compute @workgroup_size(PIXEL_GROUP, PIXEL_GROUP)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= params.width || gid.y >= params.height {
         return;

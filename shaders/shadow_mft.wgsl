@@ -5,7 +5,7 @@
 #import shared/bvh
 #import shared/counters
 #import shared/descend
-#import shared/frame
+#import shared/layout
 #import shared/suspend
 #import shared/vec16
 #import shared/bvh_vec16
@@ -109,7 +109,7 @@ fn is_done() -> bool {
     return (f_occluded & MASK_SKY) != 0u || (f_occluded & MASK_FULL) == MASK_FULL;
 }
 
-// Same rules as reference::shadow::initial_mask.
+// Same rules as reference::shadow_per_ray::initial_mask.
 fn setup_frustum(texel: GBufferTexel, sample_set: u32, inside: bool) {
     f_origin = texel.origin;
     f_geo = texel.geo_normal;

@@ -4,7 +4,7 @@
 #import shared/bvh
 #import shared/counters
 #import shared/descend
-#import shared/frame
+#import shared/layout
 #import shared/suspend
 #import shared/intersect
 #import shared/vec16
@@ -13,7 +13,7 @@
 // Suspended-state slot of a pixel: shared/suspend (status, node,
 // mask, cursor, end, alive, stack depth, popping, 16 lane words, 64 stack
 // nodes, 64 stack masks); a lane word is 1 when the lane's ray is blocked.
-const STATE_WORDS: u32 = 160u;
+const PACKET_STATE_WORDS: u32 = 160u;
 
 
 @group(0) @binding(0) var<uniform> params: ShadowParams;
@@ -41,7 +41,7 @@ fn main(ids: Vec16Ids) {
     if slot >= params.tiles_x * params.tiles_y {
         return;  // uniform: per vector
     }
-    let base = slot * STATE_WORDS;
+    let base = slot * PACKET_STATE_WORDS;
     if params.resume == 0u && g_lane == 0u {
         // A fresh start: whatever an earlier dispatch left in this slot (another
         // chunk's pixel, another frame's) must not be resumed.
@@ -63,7 +63,7 @@ fn main(ids: Vec16Ids) {
     let dir = light_points[set_ix * 16u + g_lane].xyz - origin;
     let inv_dir = safe_inverse(dir);
     let c0 = params.light_corners[0].xyz;
-    // Same rules as reference::shadow::initial_mask.
+    // Same rules as reference::shadow_per_ray::initial_mask.
     var blocked = dot(params.light_normal, origin - c0) <= 0.0 || dot(texel.geo_normal, dir) <= 0.0;
 
     var node = 0u;

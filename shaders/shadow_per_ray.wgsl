@@ -1,13 +1,12 @@
 // Per-ray soft shadows, the usual GPU compute tracer: every invocation traces one shadow ray alone with its own stack.
 // Dispatched by the shadow tracer (src/gpu/shadow_tracer.rs, Tracer::PerRay and Tracer::Reference);
-// CPU twin: reference::shadow::per_ray_masks (16 rays) and reference::shadow::reference_counts.
+// CPU twin: src/reference/shadow_per_ray.rs (per_ray_masks for 16 rays, reference_counts).
 
 #import shared/bvh
 #import shared/counters
-#import shared/frame
+#import shared/groups
 #import shared/intersect
-
-const WG_SIZE: u32 = 64u;
+#import shared/layout
 
 // 16: the pixel's ray j goes to point j of its interleaved set (x mod 4 + 4 (y mod 4)),
 // and bit j of its mask is set when it is blocked. Otherwise ("reference"): ray j goes
@@ -88,9 +87,9 @@ fn occluded(origin: vec3<f32>, dir: vec3<f32>) -> i32 {
     return result;
 }
 
-@compute @workgroup_size(WG_SIZE)
+@compute @workgroup_size(LINE_GROUP)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let index = gid.x + gid.y * groups.x * WG_SIZE;
+    let index = gid.x + gid.y * groups.x * LINE_GROUP;
     let slot = index / RAYS_PER_PIXEL;
     let j = index % RAYS_PER_PIXEL;
     if slot >= params.tiles_x * params.tiles_y {
@@ -109,7 +108,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let interleaved = RAYS_PER_PIXEL == 16u;
     let point = select(j, ((x & 3u) + 4u * (y & 3u)) * 16u + j, interleaved);
     let dir = light_points[point].xyz - texel.origin;
-    // Same rules as reference::shadow::initial_mask.
+    // Same rules as reference::shadow_per_ray::initial_mask.
     var blocked = dot(params.light_normal, texel.origin - params.light_corners[0].xyz) <= 0.0
         || dot(texel.geo_normal, dir) <= 0.0;
     if !blocked {

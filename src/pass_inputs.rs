@@ -4,7 +4,7 @@
 use glam::{Vec2, Vec3, Vec4};
 
 use crate::bvh::Bvh;
-use crate::contract::layout::{CameraParams, GpuMaterial, GpuTexture, ShadingTriangle};
+use crate::contract::layout::{CameraParams, GpuMaterial, GpuTexture, ORIGIN_OFFSET_ULPS, ShadingTriangle};
 use crate::scene::view::Camera;
 use crate::scene::{ImageSource, Scene};
 use crate::{Error, Result};
@@ -15,23 +15,12 @@ use crate::{Error, Result};
 /// far from the origin [`ORIGIN_OFFSET_ULPS`] takes over ([`shadow_ray_origin`]).
 pub const RAY_OFFSET_FRACTION: f32 = 1e-4;
 
-/// Shadow-ray origins leave the surface by at least this many steps of f32 (ulps) at
-/// the hit point's largest coordinate ([`shadow_ray_origin`]). A hit point far from
-/// the origin is off its triangle's plane by the rounding of `eye + t·dir` (up to a
-/// step per coordinate, √3 steps in distance) and the origin adds half a step per
-/// coordinate (√3/2): at most ~2.6 steps, so 4 clear it. Measured
-/// (`examples/far_from_origin.rs`, playground at 1e6): 2 steps still let a few rays
-/// start behind their surface, 4 and 8 none; every step more loses contact shadows
-/// within that distance. Near the origin the fixed offset is far larger (within 32 m
-/// of it 4 ulps are at most 1.5e-5 m; Sponza's offset is 3.5e-3 m).
-pub const ORIGIN_OFFSET_ULPS: f32 = 4.0;
-
 /// The shadow-ray origin of surface point `point` with unit `normal` (on the side the
 /// rays leave to): the point moved along the normal by `ray_offset` or by
 /// [`ORIGIN_OFFSET_ULPS`] steps of f32 at its largest coordinate, whichever is larger.
 /// A fixed offset alone fails far from the origin (a scene at 1e5 m has f32 steps of
 /// 7.8 mm): rays would start inside their own surface. The kernels compute the same
-/// expression (`shadow_ray_origin` in `shaders/shared/frame.wgsl`).
+/// expression (`shadow_ray_origin` in `shaders/shared/layout.wgsl`).
 pub fn shadow_ray_origin(point: Vec3, normal: Vec3, ray_offset: f32) -> Vec3 {
     let m = point.abs().max_element();
     // The spacing of f32 values at m: 2^(m's exponent) · 2⁻²³.
@@ -248,20 +237,6 @@ mod tests {
         assert_eq!((o.x, o.z), (far.x, far.z));
         // Zero point: no NaN, the fixed offset.
         assert_eq!(shadow_ray_origin(Vec3::ZERO, n, 1e-3), Vec3::new(0.0, 1e-3, 0.0));
-    }
-
-    #[test]
-    fn the_kernels_offset_origins_by_the_same_number_of_ulps() {
-        let module = crate::shaders::validate(&crate::shaders::assemble("shade", &[]).unwrap()).unwrap();
-        let value = module
-            .constants
-            .iter()
-            .find(|(_, c)| c.name.as_deref() == Some("ORIGIN_OFFSET_ULPS"))
-            .map(|(_, c)| module.global_expressions[c.init].clone());
-        assert!(
-            matches!(value, Some(naga::Expression::Literal(naga::Literal::F32(v))) if v == ORIGIN_OFFSET_ULPS),
-            "shared/frame.wgsl ORIGIN_OFFSET_ULPS is {value:?}, frame::ORIGIN_OFFSET_ULPS is {ORIGIN_OFFSET_ULPS}"
-        );
     }
 
     #[test]

@@ -51,15 +51,16 @@ pub static SOURCES: &[(&str, &str)] = &[
     ),
     ("shared/counters", include_str!("../shaders/shared/counters.wgsl")),
     ("shared/descend", include_str!("../shaders/shared/descend.wgsl")),
+    ("shared/groups", include_str!("../shaders/shared/groups.wgsl")),
     (
         "shared/filter_window",
         include_str!("../shaders/shared/filter_window.wgsl"),
     ),
-    ("shared/frame", include_str!("../shaders/shared/frame.wgsl")),
     (
         "shared/intersect",
         include_str!("../shaders/shared/intersect.wgsl"),
     ),
+    ("shared/layout", include_str!("../shaders/shared/layout.wgsl")),
     ("shared/primary", include_str!("../shaders/shared/primary.wgsl")),
     ("shared/refine", include_str!("../shaders/shared/refine.wgsl")),
     ("shared/surface", include_str!("../shaders/shared/surface.wgsl")),
@@ -457,6 +458,50 @@ mod tests {
                     "shaders/{name}.wgsl is not in shaders::KERNELS, so no test validates it"
                 );
             }
+        }
+    }
+
+    /// Each kernel's opening comment names its CPU twin (`CPU twin: ` and a file of
+    /// `src/reference/`), a file named after the kernel (`refine_select` → `refine.rs`, the
+    /// family's twin) or one of the listed exceptions; or says `CPU twin: none` with a reason.
+    #[test]
+    fn every_kernel_names_its_twin_after_itself() {
+        // One twin for both ways of making a G-buffer from a host's surface textures.
+        const EXCEPTIONS: &[(&str, &str)] = &[
+            ("gbuffer_from_depth", "gbuffer_from_surface"),
+            ("gbuffer_from_position", "gbuffer_from_surface"),
+        ];
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        for &(kernel, _) in KERNELS {
+            let opening: String = source(kernel)
+                .unwrap()
+                .lines()
+                .take_while(|l| l.starts_with("//"))
+                .collect::<Vec<_>>()
+                .join(" ");
+            let Some((_, rest)) = opening.split_once("CPU twin: ") else {
+                panic!("shaders/{kernel}.wgsl: its opening comment names no `CPU twin: `")
+            };
+            if rest.starts_with("none (") {
+                continue;
+            }
+            let twin = rest
+                .strip_prefix("src/reference/")
+                .and_then(|r| r.split_once(".rs"))
+                .map(|(stem, _)| stem)
+                .unwrap_or_else(|| {
+                    panic!("shaders/{kernel}.wgsl: `CPU twin: {rest}` is not src/reference/….rs")
+                });
+            assert!(
+                root.join(format!("src/reference/{twin}.rs")).is_file(),
+                "shaders/{kernel}.wgsl: src/reference/{twin}.rs does not exist"
+            );
+            assert!(
+                kernel == twin
+                    || kernel.starts_with(&format!("{twin}_"))
+                    || EXCEPTIONS.contains(&(kernel, twin)),
+                "shaders/{kernel}.wgsl: its twin src/reference/{twin}.rs is not named after it"
+            );
         }
     }
 

@@ -1,7 +1,7 @@
 // The discontinuity filter's window: which taps of a pixel's 5×5 window the filter averages.
 // Shared by the filter kernel and by the refinement's pixel selection (refine_select), so that
 // both see the same window; they declare `filter_params`, `values`, `depth` and `normal`.
-// CPU twin: `penumbra::filter::paired_taps`.
+// CPU twin: `paired_taps` in src/reference/filter.rs.
 
 // Mirrors `FilterParams` in `src/reference/filter.rs`, 32 bytes; a naga test checks size and offsets.
 struct FilterParams {

@@ -1,7 +1,7 @@
 // A host's rasterized surface turned into a G-buffer texel, for the embedded shadow pass.
 // Mirrors `src/contract/layout.rs` (SurfaceParams, ImageSize); a naga test checks sizes and offsets.
 
-#import shared/frame
+#import shared/layout
 
 // How the host's G-buffer textures map to world space, 112 bytes.
 struct SurfaceParams {

@@ -9,12 +9,12 @@ use std::time::{Duration, Instant};
 
 use penumbra::bvh::Bvh;
 use penumbra::contract::filter::FilterParams;
+use penumbra::contract::layout::MASK_SKY;
 use penumbra::gpu::{FrameSettings, GpuContext, GpuOptions, GpuScene, Renderer, RendererOptions, Tracer};
 use penumbra::output::{FloatImage, write_float_image};
 use penumbra::quality::error_regions::{Region, RegionError, classify_pixels, error_by_region};
 use penumbra::quality::metrics::ImageMetrics;
 use penumbra::reference::exact::{ExactImageOptions, exact_visibility_image_with};
-use penumbra::reference::shadow_per_ray::MASK_SKY;
 use penumbra::{Error, Result};
 use serde::Serialize;
 

@@ -5,12 +5,12 @@ use std::time::Instant;
 
 use penumbra::bvh::Bvh;
 use penumbra::contract::filter::FilterParams;
+use penumbra::contract::layout::MASK_SKY;
 use penumbra::gpu::{
     FrameSettings, GpuContext, GpuOptions, GpuScene, LeafMode, Phase, PrimaryTracer, Renderer,
     RendererOptions, Tracer, VectorVariant,
 };
 use penumbra::output::{FloatImage, HdrImage, ToneMap, write_float_image, write_image};
-use penumbra::reference::shadow_per_ray::MASK_SKY;
 use penumbra::scene::view_checks::view_warnings;
 use penumbra::{Error, Result};
 

@@ -14,10 +14,14 @@ use bytemuck::{Pod, Zeroable};
 /// and 4 `filtered: array<vec4<f32>>` (read-write storage, the output).
 pub const FILTER_KERNEL: &str = "filter";
 
+/// Every tap of the window: bit `(dy + 2)·5 + (dx + 2)` for `dx, dy` in `−2 ..= 2`
+/// (`FULL_WINDOW` of `shaders/shared/filter_window.wgsl`).
+pub const FULL_WINDOW: u32 = (1 << 25) - 1;
+
 /// The kernel's workgroup is `WORKGROUP_SIZE × WORKGROUP_SIZE`; dispatch
 /// `ceil(width / 8) × ceil(height / 8)` workgroups. Equal to `WG_SIZE` in the WGSL
 /// (a test checks).
-pub const WORKGROUP_SIZE: u32 = super::PIXEL_GROUP;
+pub const WORKGROUP_SIZE: u32 = super::groups::PIXEL_GROUP;
 
 /// The filter's settings, 32 bytes; also the kernel's uniform (WGSL
 /// `FilterParams`, same member names; a test compares the layouts).

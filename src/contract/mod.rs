@@ -1,16 +1,23 @@
 //! The contract between the GPU passes ([`crate::gpu`]) and their CPU twins
-//! ([`crate::reference`]): the uniform builders and constants a kernel shares with Rust,
-//! one file per kernel family. Both sides take them from here and neither from the other;
-//! the `#[repr(C)]` structs are in [`crate::contract::layout`] and the status words in
-//! [`crate::contract::counters`]. Tests check the WGSL side of each constant with naga.
+//! ([`crate::reference`]): everything a kernel shares with Rust. Both sides take it from
+//! here and neither from the other. One file per shared WGSL module (`bvh`, `counters`,
+//! `groups`, `intersect`, `layout` — the `#[repr(C)]` structs —, `suspend`, and
+//! `filter` for `shared/filter_window`), one per kernel family for the uniform builders and
+//! the kernels' own constants (`primary`, `refine`, `shade`, `shadow`). Naga tests check
+//! the structs' layouts ([`layout`]) and every WGSL constant of every kernel variant
+//! against its Rust value (below).
 
+pub mod bvh;
 pub mod counters;
 pub mod filter;
+pub mod groups;
+pub mod intersect;
 pub mod layout;
 pub mod primary;
 pub mod refine;
 pub mod shade;
 pub mod shadow;
+pub mod suspend;
 
 /// Loop iterations a vector (or ray) runs per dispatch before it suspends (shadow
 /// kernels) or stops and reports its pixels (primary kernels); below lavapipe's
@@ -20,98 +27,115 @@ pub mod shadow;
 /// nowhere). A loop that ends early all the same is reported ([`crate::Error::LoopCut`]).
 pub const ITERATION_BUDGET: u32 = 60_000;
 
-/// Depth of every kernel's traversal stack (`STACK_SIZE` in the kernels); a BVH deeper
-/// than this cannot be traced ([`crate::gpu::validate_for_gpu`]).
-pub const STACK_SIZE: usize = 64;
-
-/// Side of the square workgroups of the per-pixel kernels (one invocation per pixel):
-/// the host dispatches `ceil(width / PIXEL_GROUP) × ceil(height / PIXEL_GROUP)` of them.
-pub const PIXEL_GROUP: u32 = 8;
-
-/// Invocations of the one-dimensional workgroups (the per-ray shadow kernel's rays, the
-/// refinement's list slots).
-pub const LINE_GROUP: u32 = 64;
-
-/// The workgroup size each non-vector kernel declares (`@workgroup_size`), which the
-/// host's dispatches assume (checked by a naga test).
-pub const KERNEL_GROUPS: &[(&str, [u32; 3])] = &[
-    ("filter", [PIXEL_GROUP, PIXEL_GROUP, 1]),
-    ("gbuffer_from_depth", [PIXEL_GROUP, PIXEL_GROUP, 1]),
-    ("gbuffer_from_position", [PIXEL_GROUP, PIXEL_GROUP, 1]),
-    ("primary", [PIXEL_GROUP, PIXEL_GROUP, 1]),
-    ("refine_gather", [PIXEL_GROUP, PIXEL_GROUP, 1]),
-    ("refine_select", [PIXEL_GROUP, PIXEL_GROUP, 1]),
-    ("shade", [PIXEL_GROUP, PIXEL_GROUP, 1]),
-    ("visibility_to_texture", [PIXEL_GROUP, PIXEL_GROUP, 1]),
-    ("visibility_values", [PIXEL_GROUP, PIXEL_GROUP, 1]),
-    ("refine_resolve", [LINE_GROUP, 1, 1]),
-    ("shadow_per_ray", [LINE_GROUP, 1, 1]),
-];
-
 #[cfg(test)]
-pub(crate) mod tests {
-    /// Every non-vector kernel's `@workgroup_size` is the one [`super::KERNEL_GROUPS`] gives
-    /// it, so the host's dispatch arithmetic (in units of [`super::PIXEL_GROUP`] and
-    /// [`super::LINE_GROUP`]) covers each pixel, ray and slot once.
+mod tests {
+    /// Every WGSL constant whose value Rust also uses, with Rust's value: one per shared
+    /// WGSL module's file of this module, then the kernels' own.
+    fn rust_values() -> Vec<(&'static str, naga::Literal)> {
+        use super::*;
+        use naga::Literal::{F32, U32};
+        let u = |v: usize| U32(v as u32);
+        vec![
+            // shared/bvh, shared/bvh_vec16
+            ("STACK_SIZE", u(bvh::STACK_SIZE)),
+            ("NODE_WORDS", u(bvh::NODE_WORDS)),
+            ("TRIANGLE_WORDS", u(bvh::TRIANGLE_WORDS)),
+            // shared/counters
+            ("WORD_STATUS", u(counters::WORD_STATUS)),
+            ("WORD_NODES_VISITED", u(counters::WORD_NODES_VISITED)),
+            ("WORD_BOX_TESTS", u(counters::WORD_BOX_TESTS)),
+            ("WORD_TRIANGLES_ACCESSED", u(counters::WORD_TRIANGLES_ACCESSED)),
+            (
+                "WORD_TRIANGLES_AFTER_CULLING",
+                u(counters::WORD_TRIANGLES_AFTER_CULLING),
+            ),
+            ("WORD_TRIANGLE_TESTS", u(counters::WORD_TRIANGLE_TESTS)),
+            ("WORD_LOOP_CUT", u(counters::WORD_LOOP_CUT)),
+            // shared/filter_window
+            ("FULL_WINDOW", U32(filter::FULL_WINDOW)),
+            // shared/groups
+            ("PIXEL_GROUP", U32(groups::PIXEL_GROUP)),
+            ("LINE_GROUP", U32(groups::LINE_GROUP)),
+            // shared/intersect
+            ("BOX_EXIT_SCALE", F32(intersect::BOX_EXIT_SCALE)),
+            // shared/layout, shared/surface
+            ("MASK_FULL", U32(layout::MASK_FULL)),
+            ("MASK_SKY", U32(layout::MASK_SKY)),
+            ("ORIGIN_OFFSET_ULPS", F32(layout::ORIGIN_OFFSET_ULPS)),
+            ("UNKNOWN_TRIANGLE", U32(layout::GBufferTexel::UNKNOWN_TRIANGLE)),
+            // shared/suspend
+            ("ST_STATUS", u(suspend::ST_STATUS)),
+            ("ST_LANES", u(suspend::ST_LANES)),
+            ("ST_STACK_NODE", u(suspend::ST_STACK_NODE)),
+            ("ST_STACK_MASK", u(suspend::ST_STACK_MASK)),
+            ("STATUS_SUSPENDED", U32(suspend::STATUS_SUSPENDED)),
+            // primary_mft
+            ("DEPTH_SLACK", F32(primary::DEPTH_SLACK)),
+            ("T_NONE", F32(primary::T_NONE)),
+            ("NO_TRIANGLE", U32(layout::GBufferTexel::NO_TRIANGLE)),
+            // shade
+            ("PI", F32(std::f32::consts::PI)),
+            // shadow_mft
+            ("STATE_WORDS", u(shadow::STATE_WORDS)),
+            ("ST_CAND", u(shadow::ST_CAND)),
+            ("ST_LEAF_MASK", u(shadow::ST_LEAF_MASK)),
+            ("ST_PENDING", u(shadow::ST_PENDING)),
+            ("ST_SHRUNK", u(shadow::ST_SHRUNK)),
+            ("SHRINK_FLAG", U32(shadow::SHRINK_FLAG)),
+            ("SHRINK_MARGIN", F32(shadow::SHRINK_MARGIN)),
+            ("BOUNDS_PAD", F32(shadow::BOUNDS_PAD)),
+            // shadow_packet
+            ("PACKET_STATE_WORDS", u(shadow::PACKET_STATE_WORDS)),
+        ]
+    }
+
+    /// WGSL constants no Rust code uses, and why.
+    const WGSL_ONLY: &[(&str, &str)] = &[
+        (
+            "TESTED",
+            "shadow_mft's flag on a leaf test's result word; the twin returns a pair",
+        ),
+        (
+            "VEC16_LANE_WORDS",
+            "which shared/vec16 implementation was imported; Rust picks it by alias",
+        ),
+        (
+            "VEC16_WG_SIZE",
+            "the workgroup vector's 16 invocations; the host reads it from the variant",
+        ),
+    ];
+
+    /// Each constant of each kernel variant (its own and its imports') is either Rust's
+    /// value of the same name or listed as WGSL-only, and each of Rust's values is declared
+    /// by some kernel: a constant changed on one side, or a new one shared without a
+    /// Rust twin, fails here naming the kernel.
     #[test]
-    fn kernels_declare_the_workgroup_sizes_the_host_dispatches() {
-        for &(kernel, size) in super::KERNEL_GROUPS {
-            let module =
-                naga::front::wgsl::parse_str(&crate::shaders::assemble(kernel, &[]).unwrap()).unwrap();
-            let entry = module.entry_points.iter().find(|e| e.name == "main").unwrap();
-            assert_eq!(entry.workgroup_size, size, "{kernel}");
-        }
-    }
-
-    /// The value of WGSL constant `name` in `kernel` (assembled with `aliases`), if it has one.
-    pub(crate) fn wgsl_constant_if_any(
-        kernel: &str,
-        aliases: &[(&str, &str)],
-        name: &str,
-    ) -> Option<naga::Literal> {
-        let module =
-            naga::front::wgsl::parse_str(&crate::shaders::assemble(kernel, aliases).unwrap()).unwrap();
-        let (_, c) = module
-            .constants
-            .iter()
-            .find(|(_, c)| c.name.as_deref() == Some(name))?;
-        match module.global_expressions[c.init] {
-            naga::Expression::Literal(l) => Some(l),
-            ref other => panic!("{kernel}: {name} = {other:?}"),
-        }
-    }
-
-    /// [`wgsl_constant_if_any`], which must exist.
-    pub(crate) fn wgsl_constant(kernel: &str, aliases: &[(&str, &str)], name: &str) -> naga::Literal {
-        wgsl_constant_if_any(kernel, aliases, name).unwrap_or_else(|| panic!("{kernel}: no constant {name}"))
-    }
-
-    /// Every kernel variant that declares one of the shared constants declares the value
-    /// Rust uses (the stack depth, the sky and full masks, the status word of loop cuts).
-    #[test]
-    fn every_kernel_declares_the_shared_constants_as_rust_does() {
-        use naga::Literal::U32;
-        let shared = [
-            ("STACK_SIZE", super::STACK_SIZE as u32),
-            ("MASK_SKY", super::shadow::MASK_SKY),
-            ("MASK_FULL", super::shadow::MASK_FULL),
-            ("WORD_LOOP_CUT", crate::contract::counters::WORD_LOOP_CUT as u32),
-            ("WORD_STATUS", crate::contract::counters::WORD_STATUS as u32),
-        ];
-        let mut checked = 0;
+    fn every_wgsl_constant_has_rusts_value_in_every_kernel_variant() {
+        let rust = rust_values();
+        let mut seen = std::collections::BTreeSet::new();
         for &(kernel, variants) in crate::shaders::KERNELS {
             for &aliases in variants {
-                for (name, value) in shared {
-                    if let Some(v) = wgsl_constant_if_any(kernel, aliases, name) {
-                        assert_eq!(v, U32(value), "{kernel} with {aliases:?}: {name}");
-                        checked += 1;
+                let wgsl = crate::shaders::assemble(kernel, aliases).unwrap();
+                let module = naga::front::wgsl::parse_str(&wgsl).unwrap();
+                for (_, c) in module.constants.iter() {
+                    let Some(name) = c.name.as_deref() else { continue };
+                    let naga::Expression::Literal(value) = module.global_expressions[c.init] else {
+                        panic!("{kernel}: {name} is not a literal")
+                    };
+                    if let Some(&(_, expected)) = rust.iter().find(|(n, _)| *n == name) {
+                        assert_eq!(value, expected, "{kernel} with {aliases:?}: {name}");
+                        seen.insert(name.to_string());
+                    } else {
+                        assert!(
+                            WGSL_ONLY.iter().any(|(n, _)| *n == name),
+                            "{kernel}: constant {name} is neither in rust_values() nor in WGSL_ONLY"
+                        );
                     }
                 }
             }
         }
-        assert!(
-            checked >= 20,
-            "only {checked} constants found: the kernels' names changed?"
-        );
+        for (name, _) in &rust {
+            assert!(seen.contains(*name), "no kernel declares {name}");
+        }
     }
 }

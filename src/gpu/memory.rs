@@ -9,7 +9,7 @@
 //!
 //! The per-pixel sizes are the list the frame allocates from
 //! ([`super::pixel_buffers::PIXEL_BUFFERS`]); the scene's mirror `scene_buffers.rs`, the
-//! shadow pass's state buffer `shadow_tracer.rs` ([`SHADOW_STATE_WORDS`] words per tile
+//! shadow pass's state buffer `shadow_tracer.rs` ([`crate::contract::shadow::STATE_WORDS`] words per tile
 //! of a chunk of at most [`SHADOW_CHUNK_TILES`]² tiles); the buffer helpers pad every
 //! buffer to at least 16 bytes and a multiple of 4.
 //! Uniform buffers, the 4 KiB of light points, status words and timestamp
@@ -21,8 +21,6 @@ use crate::contract::layout::{BvhNode, BvhTriangle, GpuMaterial, GpuTexture, Sha
 use crate::scene::Scene;
 use crate::{Error, Result};
 
-/// 32-bit words of one tile's suspended shadow-pass state.
-pub const SHADOW_STATE_WORDS: u64 = super::shadow_tracer::STATE_WORDS;
 /// Tiles per shadow-pass dispatch along each axis.
 pub const SHADOW_CHUNK_TILES: u64 = super::shadow_tracer::CHUNK_TILES as u64;
 
@@ -96,7 +94,7 @@ pub fn frame_buffers(width: u32, height: u32) -> Vec<BufferSize> {
     let chunk = |side: u32| SHADOW_CHUNK_TILES.min(u64::from(side.div_ceil(4))).max(1);
     out.push(BufferSize {
         label: "shadow state",
-        bytes: padded(chunk(width) * chunk(height) * SHADOW_STATE_WORDS * 4),
+        bytes: padded(chunk(width) * chunk(height) * crate::gpu::shadow_tracer::STATE_WORDS * 4),
     });
     out.push(BufferSize {
         label: "readback staging",
@@ -203,7 +201,10 @@ mod tests {
         let get = |label: &str| buffers.iter().find(|b| b.label == label).unwrap().bytes;
         assert_eq!(mib(get("G-buffer")), 64.0);
         assert_eq!(mib(get("shadow masks")), 4.0);
-        assert_eq!(get("shadow state"), 128 * 128 * SHADOW_STATE_WORDS * 4);
+        assert_eq!(
+            get("shadow state"),
+            128 * 128 * crate::gpu::shadow_tracer::STATE_WORDS * 4
+        );
         // 64 + 4 + 16 + 4 + 16 + 16 + 16 per pixel, 16 staging, 11 MiB of state (176 words).
         assert_eq!(mib(total_bytes(&buffers)), 136.0 + 16.0 + 11.0);
         assert_eq!(largest(&buffers).unwrap().label, "G-buffer");
@@ -214,7 +215,11 @@ mod tests {
         let buffers = frame_buffers(1, 7);
         assert!(buffers.iter().all(|b| b.bytes >= 16 && b.bytes % 4 == 0));
         let state = buffers.iter().find(|b| b.label == "shadow state").unwrap();
-        assert_eq!(state.bytes, 2 * SHADOW_STATE_WORDS * 4, "1x7 pixels = 1x2 tiles");
+        assert_eq!(
+            state.bytes,
+            2 * crate::gpu::shadow_tracer::STATE_WORDS * 4,
+            "1x7 pixels = 1x2 tiles"
+        );
     }
 
     #[test]

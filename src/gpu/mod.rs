@@ -36,7 +36,7 @@ pub use embed::{ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, Surface
 pub use frame::Frame;
 pub use motion::{MotionSettings, MotionUpdate};
 pub use pixel_buffers::{PIXEL_BUFFERS, PixelBuffer, PixelBuffers};
-pub use primary_pass::{PrimaryPass, PrimaryStatus, PrimaryTracer};
+pub use primary_pass::{PrimaryOptions, PrimaryPass, PrimaryStatus, PrimaryTracer};
 pub use render::Renderer;
 pub use render_settings::{FrameSettings, Phase, RendererOptions};
 pub use scene_buffers::{GpuScene, validate_for_gpu};

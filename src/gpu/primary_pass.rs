@@ -16,10 +16,11 @@
 
 use super::kernel::{Checks, Kernel, buffer, uniform_buffer};
 use super::{GpuContext, GpuScene, GpuTimer, VectorVariant, read_buffer};
+use crate::contract::ITERATION_BUDGET;
 use crate::contract::counters::{Counters, STATUS_WORDS, WORD_LOOP_CUT, WORD_STATUS};
+use crate::contract::groups::PIXEL_GROUP;
 use crate::contract::layout::CameraParams;
 use crate::contract::primary::BLOCK;
-use crate::contract::{ITERATION_BUDGET, PIXEL_GROUP};
 use crate::{Error, Result};
 
 /// Which kernel traces the camera rays.
@@ -86,6 +87,34 @@ impl PrimaryStatus {
     }
 }
 
+/// What a [`PrimaryPass`] is built for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PrimaryOptions {
+    /// The kernel.
+    pub tracer: PrimaryTracer,
+    /// The multi-frusta kernel's vector variant, chosen as in [`VectorVariant::choose`]
+    /// (the per-ray kernel has no vectors and ignores it).
+    pub variant: Option<VectorVariant>,
+    /// Compile the work counters in.
+    pub counters: bool,
+    /// Loop iterations a ray (per-ray) or a vector (multi-frusta) may run, at least 1:
+    /// lower, tests drive the overflow report on small scenes; above the driver's loop
+    /// limit (lavapipe: 65,535), a loop it ends is reported as [`Error::LoopCut`].
+    pub iteration_budget: u32,
+}
+
+impl Default for PrimaryOptions {
+    /// The per-ray kernel, no counters, [`ITERATION_BUDGET`].
+    fn default() -> Self {
+        PrimaryOptions {
+            tracer: PrimaryTracer::PerRay,
+            variant: None,
+            counters: false,
+            iteration_budget: ITERATION_BUDGET,
+        }
+    }
+}
+
 /// The primary pass's pipeline for one tracer.
 #[derive(Debug)]
 pub struct PrimaryPass {
@@ -98,29 +127,14 @@ pub struct PrimaryPass {
 }
 
 impl PrimaryPass {
-    /// Builds the pipeline of `tracer`. `variant` chooses the vector variant of the
-    /// multi-frusta kernel as in [`VectorVariant::choose`] (the per-ray kernel has no
-    /// vectors and ignores it); `counters` compiles the work counters in.
-    pub fn new(
-        ctx: &GpuContext,
-        tracer: PrimaryTracer,
-        variant: Option<VectorVariant>,
-        counters: bool,
-    ) -> Result<PrimaryPass> {
-        PrimaryPass::with_iteration_budget(ctx, tracer, variant, counters, ITERATION_BUDGET)
-    }
-
-    /// [`PrimaryPass::new`] with the loop iterations a ray (per-ray) or a vector
-    /// (multi-frusta) may run set to `budget` (at least 1): lower, tests drive the
-    /// overflow report on small scenes; above the driver's loop limit (lavapipe: 65,535),
-    /// a loop it ends is reported as [`Error::LoopCut`].
-    pub fn with_iteration_budget(
-        ctx: &GpuContext,
-        tracer: PrimaryTracer,
-        variant: Option<VectorVariant>,
-        counters: bool,
-        budget: u32,
-    ) -> Result<PrimaryPass> {
+    /// Builds the pipeline that `options` describe.
+    pub fn new(ctx: &GpuContext, options: &PrimaryOptions) -> Result<PrimaryPass> {
+        let PrimaryOptions {
+            tracer,
+            variant,
+            counters,
+            iteration_budget: budget,
+        } = *options;
         if budget == 0 {
             return Err(Error::value(
                 "primary pass iteration budget",
@@ -263,22 +277,10 @@ impl PrimaryPass {
     }
 
     /// Traces `camera`'s image into `gbuffer` (`array<GBufferTexel>`, at least
-    /// width × height), waits, and returns the counters (`None` when not compiled in);
-    /// an error when a ray ran out of loop iterations. Timed as `"primary"` when a timer is given.
+    /// width × height), waits, and returns the status: rays that ran out of loop
+    /// iterations are counted in it ([`PrimaryStatus::check`] makes them an error) with the
+    /// counters when compiled in. Timed as `"primary"` when a timer is given.
     pub fn run(
-        &self,
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        camera: &CameraParams,
-        gbuffer: &wgpu::Buffer,
-        timer: Option<&mut GpuTimer>,
-    ) -> Result<Option<Counters>> {
-        self.run_with_status(ctx, scene, camera, gbuffer, timer)?.check()
-    }
-
-    /// [`PrimaryPass::run`], returning the status as it is: rays that ran out of loop
-    /// iterations are counted in it, not an error.
-    pub fn run_with_status(
         &self,
         ctx: &GpuContext,
         scene: &GpuScene,

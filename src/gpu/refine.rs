@@ -15,8 +15,8 @@
 use super::kernel::{Checks, Kernel, buffer, uniform_buffer};
 use super::pixel_buffers::PixelBuffers;
 use super::{GpuContext, GpuScene, GpuTimer, ShadowImage, ShadowTracer, empty_storage_buffer, read_buffer};
+use crate::contract::groups::{LINE_GROUP, PIXEL_GROUP};
 use crate::contract::layout::{GBufferTexel, RefineParams, ShadowParams};
-use crate::contract::{LINE_GROUP, PIXEL_GROUP};
 use crate::sampling::SETS;
 use crate::{Error, Result};
 

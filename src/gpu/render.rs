@@ -6,20 +6,20 @@ use glam::Vec3;
 
 use super::kernel::uniform_buffer;
 use super::pixel_buffers::PixelBuffers;
-use super::primary_pass::{PrimaryPass, PrimaryStatus, PrimaryTracer};
+use super::primary_pass::{PrimaryOptions, PrimaryPass, PrimaryStatus, PrimaryTracer};
 use super::shadow_stages::{ShadowStages, VisibilityStage};
 use super::tiling::{TileRegion, tile_regions, tile_side};
 use super::{
     Frame, FrameSettings, GpuContext, GpuScene, GpuTimer, LeafMode, Phase, RendererOptions, ShadowImage,
-    Tracer, TracerOptions, VectorVariant, read_buffer, storage_buffer,
+    Tracer, TracerOptions, VectorVariant, read_buffer,
 };
+use crate::contract::ITERATION_BUDGET;
 use crate::contract::filter::FilterParams;
+use crate::contract::groups::PIXEL_GROUP;
 use crate::contract::layout::{CameraParams, GBufferTexel};
 use crate::contract::shade::shade_params;
 use crate::contract::shadow::shadow_params;
-use crate::contract::{ITERATION_BUDGET, PIXEL_GROUP};
 use crate::pass_inputs::{RAY_OFFSET_FRACTION, camera_params, tile_camera};
-use crate::sampling;
 use crate::scene::view::View;
 use crate::{Error, Result};
 
@@ -42,22 +42,25 @@ impl Renderer {
     pub fn new(ctx: &GpuContext, options: impl Into<RendererOptions>) -> Result<Renderer> {
         let options = options.into();
         Ok(Renderer {
-            primary: PrimaryPass::with_iteration_budget(
+            primary: PrimaryPass::new(
                 ctx,
-                options.primary,
-                options.variant,
-                options.counters,
-                match options.primary {
-                    PrimaryTracer::Mft => options.primary_iteration_budget,
-                    PrimaryTracer::PerRay => ITERATION_BUDGET,
+                &PrimaryOptions {
+                    tracer: options.primary,
+                    variant: options.variant,
+                    counters: options.counters,
+                    iteration_budget: match options.primary {
+                        PrimaryTracer::Mft => options.primary_iteration_budget,
+                        PrimaryTracer::PerRay => ITERATION_BUDGET,
+                    },
                 },
             )?,
             primary_fallback: match options.primary {
                 PrimaryTracer::Mft => Some(PrimaryPass::new(
                     ctx,
-                    PrimaryTracer::PerRay,
-                    None,
-                    options.counters,
+                    &PrimaryOptions {
+                        counters: options.counters,
+                        ..PrimaryOptions::default()
+                    },
                 )?),
                 PrimaryTracer::PerRay => None,
             },
@@ -214,12 +217,7 @@ impl Renderer {
         let pixel_count = u64::from(w) * u64::from(h);
         let pixels = PixelBuffers::new(ctx, w, h, true)?;
         let status = PrimaryPass::status_buffer(&ctx.device);
-        let points = match self.tracer() {
-            Tracer::Reference { rays } => sampling::reference_light_points(&view.light, rays),
-            _ => sampling::light_points(&view.light),
-        };
-        let points: Vec<[f32; 4]> = points.iter().map(|p: &Vec3| p.extend(0.0).to_array()).collect();
-        let light_points = storage_buffer(ctx, "light points", &points, wgpu::BufferUsages::empty())?;
+        let light_points = self.stages.tracer.light_points_buffer(&ctx.device, &view.light);
 
         let camera_buf = uniform_buffer(ctx, "camera", camera);
         let shade_buf = uniform_buffer(ctx, "shade params", &shade_params(&view.light, w, h));

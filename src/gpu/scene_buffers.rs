@@ -7,7 +7,7 @@ use glam::Vec3;
 
 use super::{GpuContext, storage_buffer};
 use crate::bvh::Bvh;
-use crate::contract::STACK_SIZE;
+use crate::contract::bvh::STACK_SIZE;
 use crate::contract::layout::{BvhNode, BvhTriangle};
 use crate::pass_inputs::ShadingData;
 use crate::scene::Scene;

@@ -10,8 +10,8 @@ use super::kernel::{Checks, Kernel, buffer, uniform_buffer_on};
 use super::pixel_buffers::PixelBuffers;
 use super::refine::{RefineBuffers, Refinement};
 use super::{GpuContext, GpuScene, GpuTimer, ShadowTracer, Tracer, TracerOptions};
-use crate::contract::PIXEL_GROUP;
 use crate::contract::filter::{FILTER_KERNEL, FilterParams};
+use crate::contract::groups::PIXEL_GROUP;
 use crate::contract::layout::ShadowParams;
 use crate::contract::refine::selection_params;
 use crate::{Error, Result};
@@ -55,7 +55,7 @@ impl ShadowStages {
             VisibilityStage::Values => Kernel::new(ctx, "visibility_values", &[], &[], Checks::Checked)?,
         };
         Ok(ShadowStages {
-            tracer: ShadowTracer::with_options(ctx, options)?,
+            tracer: ShadowTracer::new(ctx, options)?,
             stage,
             visibility,
             filter: Kernel::new(ctx, FILTER_KERNEL, &[], &[], Checks::Checked)?,

@@ -11,14 +11,14 @@
 
 use super::kernel::{Checks, Kernel, buffer, uniform_buffer_on};
 use super::{GpuContext, GpuScene, GpuTimer, LeafMode, Tracer, TracerOptions, VectorVariant, read_buffer};
-use crate::contract::LINE_GROUP;
 use crate::contract::counters::{Counters, STATUS_WORDS};
 use crate::contract::counters::{WORD_LOOP_CUT, WORD_STATUS};
+use crate::contract::groups::LINE_GROUP;
 use crate::contract::layout::ShadowParams;
+use crate::scene::view::QuadLight;
 use crate::{Error, Result};
 
-/// 32-bit words of one tile's suspended state ([`crate::contract::shadow::STATE_WORDS`];
-/// the packet kernel uses the first 160).
+/// 32-bit words of one tile's suspended state (the packet kernel uses fewer).
 pub(crate) const STATE_WORDS: u64 = crate::contract::shadow::STATE_WORDS as u64;
 /// Tiles per dispatch along each axis: 128×128 tiles = 512×512 pixels, so
 /// the state buffer stays at 10 MiB and no dispatch runs for long.
@@ -61,25 +61,8 @@ pub struct ShadowTracer {
 const PER_RAY_GROUPS_X: u32 = 4096;
 
 impl ShadowTracer {
-    /// The MFT pipeline; `variant` as in [`VectorVariant::choose`], `leaf_mode` sets the
-    /// kernel's `LEAF_TRANSPOSED` override.
-    pub fn new(
-        ctx: &GpuContext,
-        variant: Option<VectorVariant>,
-        leaf_mode: LeafMode,
-    ) -> Result<ShadowTracer> {
-        ShadowTracer::with_options(
-            ctx,
-            &TracerOptions {
-                variant,
-                leaf_mode,
-                ..TracerOptions::default()
-            },
-        )
-    }
-
-    /// The pipeline of any tracer.
-    pub fn with_options(ctx: &GpuContext, options: &TracerOptions) -> Result<ShadowTracer> {
+    /// The pipeline of the tracer that `options` describe.
+    pub fn new(ctx: &GpuContext, options: &TracerOptions) -> Result<ShadowTracer> {
         let tracer = options.tracer;
         let (variant, vectors_per_workgroup) = if tracer.uses_vector() {
             VectorVariant::choose(&ctx.info, options.variant)?
@@ -137,6 +120,23 @@ impl ShadowTracer {
             Tracer::Reference { rays } => rays,
             _ => crate::sampling::SAMPLES as u32,
         }
+    }
+
+    /// The light points of `light` that the kernel reads, uploaded: the 16 interleaved
+    /// sets of [`crate::sampling::light_points`], or the reference tracer's own
+    /// ([`crate::sampling::reference_light_points`]); `vec4` each, w unused.
+    pub fn light_points_buffer(&self, device: &wgpu::Device, light: &QuadLight) -> wgpu::Buffer {
+        use wgpu::util::DeviceExt;
+        let points = match self.tracer {
+            Tracer::Reference { rays } => crate::sampling::reference_light_points(light, rays),
+            _ => crate::sampling::light_points(light),
+        };
+        let points: Vec<[f32; 4]> = points.iter().map(|p| p.extend(0.0).to_array()).collect();
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("light points"),
+            contents: bytemuck::cast_slice(&points),
+            usage: wgpu::BufferUsages::STORAGE,
+        })
     }
 
     /// The parameters of each dispatch chunk of the image `params` describes: its first

@@ -320,7 +320,7 @@ pub struct ExactImageOptions<'a> {
 }
 
 /// Exact visibility of every pixel of a row-major G-buffer, rows spread over
-/// all cores; sky pixels get 1 (as [`super::shadow_per_ray::visibility`] gives them).
+/// all cores; sky pixels get 1 (as [`super::visibility::visibility`] gives them).
 pub fn exact_visibility_image(
     bvh: &Bvh,
     gbuffer: &[GBufferTexel],

@@ -133,9 +133,6 @@ pub fn filter_pixel(
     [sum[0] / n, sum[1] / n, sum[2] / n, sum[3] / n]
 }
 
-/// Every tap of the window: bit `(dy + 2)·5 + (dx + 2)` for `dx, dy` in `−2 ..= 2`.
-pub const FULL_WINDOW: u32 = (1 << 25) - 1;
-
 /// The taps of `(x, y)`'s window that [`filter_pixel`] averages, one bit each
 /// (`(dy + 2)·5 + (dx + 2)`): inside the image, at a similar depth, normal and
 /// unfiltered visibility, and with their mirror image through the centre too;

@@ -3,13 +3,8 @@
 
 use glam::Vec3;
 
+use crate::contract::intersect::BOX_EXIT_SCALE;
 use crate::contract::layout::{BvhNode, BvhTriangle};
-
-/// `1 + 2γ₃` with `γₙ = n·ε / (1 − n·ε)`, ε = 2⁻²⁴: scaling the slab test's exit
-/// distance by it makes the f32 box test conservative (Ize, "Robust BVH Ray
-/// Traversal", JCGT 2013), so rounding never culls a box that the exact
-/// test would enter.
-const BOX_EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
 /// Reciprocal direction with zero components replaced by a tiny same-signed
 /// value, so slab distances are ±huge instead of NaN (0·∞) for axis-parallel rays.

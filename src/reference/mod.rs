@@ -21,6 +21,7 @@ pub mod shadow_mft;
 pub mod shadow_packet;
 pub mod shadow_per_ray;
 mod traverse;
+pub mod visibility;
 
 pub use intersect::{RayBox, intersect_box, intersect_triangle, safe_inverse};
 pub use traverse::{Hit, any_hit, closest_hit, closest_hit_counted};

@@ -22,12 +22,10 @@ use crate::contract::counters::Counters;
 use crate::contract::layout::{BvhNode, BvhTriangle, CameraParams, GBufferTexel};
 use crate::pass_inputs::{ShadingData, camera_ray};
 
+pub use crate::contract::ITERATION_BUDGET;
+use crate::contract::bvh::STACK_SIZE;
 pub use crate::contract::primary::BLOCK;
-pub use crate::contract::{ITERATION_BUDGET, STACK_SIZE};
-/// A box or triangle is dropped when its depth exceeds every ray's closest `t` by this factor.
-const DEPTH_SLACK: f32 = 1.001;
-/// A ray's `t` before it hits anything (the per-ray kernel's initial `t_best`).
-const T_NONE: f32 = f32::MAX;
+use crate::contract::primary::{DEPTH_SLACK, T_NONE};
 
 /// One lane's frustum of 16 camera rays and their closest hits so far.
 #[derive(Clone, Copy, Debug)]

@@ -27,11 +27,13 @@
 use glam::{Vec3, Vec4};
 
 use crate::bvh::Bvh;
+use crate::contract::filter::FULL_WINDOW;
 use crate::contract::filter::FilterParams;
+use crate::contract::layout::MASK_FULL;
 use crate::contract::layout::{GBufferTexel, RefineParams, ShadeParams, ShadowParams};
-use crate::reference::filter::{FULL_WINDOW, paired_taps};
+use crate::reference::filter::paired_taps;
 use crate::reference::shade::unshadowed_irradiance;
-use crate::reference::shadow_per_ray::{MASK_FULL, per_ray_mask};
+use crate::reference::shadow_per_ray::per_ray_mask;
 use crate::sampling::{SAMPLES, SETS, pixel_set};
 
 pub use crate::contract::refine::{REFINE_VISIBILITY_TOLERANCE, selection_params};

@@ -5,7 +5,8 @@
 
 use glam::{Vec3, Vec4};
 
-use super::shadow_per_ray::{MASK_SKY, visibility};
+use super::visibility::visibility;
+use crate::contract::layout::MASK_SKY;
 use crate::contract::layout::{GBufferTexel, ShadeParams};
 
 pub use crate::contract::shade::shade_params;
@@ -23,7 +24,7 @@ pub fn shade_pixel(params: &ShadeParams, texel: &GBufferTexel, mask: u32) -> Vec
 }
 
 /// Irradiance from the light treated as a point at its centre, with its area and
-/// both cosines, before shadowing (WGSL `unshadowed_irradiance` in `shared/frame`).
+/// both cosines, before shadowing (WGSL `unshadowed_irradiance` in `shared/layout`).
 pub fn unshadowed_irradiance(params: &ShadeParams, texel: &GBufferTexel) -> Vec3 {
     let w = params.light_center - texel.origin;
     let r2 = w.dot(w).max(1e-12);

@@ -15,16 +15,15 @@
 use glam::{Vec2, Vec3};
 
 use super::descend::descend;
-use super::shadow_per_ray::{MASK_FULL, MASK_SKY, initial_mask, light_corners};
+use super::shadow_per_ray::{initial_mask, light_corners};
 use crate::bvh::Bvh;
-use crate::contract::layout::{BvhNode, BvhTriangle, GBufferTexel, ShadowParams};
-use crate::sampling::SAMPLES_PER_SET;
-
-pub use crate::contract::STACK_SIZE;
-pub use crate::contract::shadow::{
-    BOUNDS_PAD, SHRINK_FLAG, SHRINK_MARGIN, ST_CAND, ST_LANES, ST_LEAF_MASK, ST_PENDING, ST_SHRUNK,
-    ST_STACK_MASK, ST_STACK_NODE, ST_STATUS, STATE_WORDS, STATUS_SUSPENDED,
+use crate::contract::bvh::STACK_SIZE;
+use crate::contract::layout::{BvhNode, BvhTriangle, GBufferTexel, MASK_FULL, MASK_SKY, ShadowParams};
+use crate::contract::shadow::{
+    BOUNDS_PAD, SHRINK_FLAG, SHRINK_MARGIN, ST_CAND, ST_LEAF_MASK, ST_PENDING, ST_SHRUNK, STATE_WORDS,
 };
+use crate::contract::suspend::{ST_LANES, ST_STACK_MASK, ST_STACK_NODE, ST_STATUS, STATUS_SUSPENDED};
+use crate::sampling::SAMPLES_PER_SET;
 
 /// The box around the origin and the light rectangle's corners, widened by [`BOUNDS_PAD`].
 fn frustum_bounds(o: Vec3, c: &[Vec3; 4]) -> (Vec3, Vec3) {

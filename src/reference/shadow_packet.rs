@@ -11,10 +11,11 @@ use glam::Vec3;
 
 use super::counters::Counters;
 use super::descend::descend;
-use super::shadow_mft::STACK_SIZE;
-use super::shadow_per_ray::{MASK_SKY, initial_mask};
+use super::shadow_per_ray::initial_mask;
 use super::{RayBox, intersect_box, intersect_triangle, safe_inverse};
 use crate::bvh::Bvh;
+use crate::contract::bvh::STACK_SIZE;
+use crate::contract::layout::MASK_SKY;
 use crate::contract::layout::{GBufferTexel, ShadowParams};
 use crate::sampling::{SAMPLES_PER_SET, pixel_set};
 

@@ -23,7 +23,8 @@ use crate::reference::any_hit;
 use crate::sampling::{SAMPLES_PER_SET, pixel_set};
 
 pub use crate::contract::ITERATION_BUDGET;
-pub use crate::contract::shadow::{MASK_FULL, MASK_SKY, SHADOW_T_MAX, shadow_params};
+use crate::contract::layout::{MASK_FULL, MASK_SKY};
+pub use crate::contract::shadow::{SHADOW_T_MAX, shadow_params};
 
 /// The light's corners as points.
 pub fn light_corners(params: &ShadowParams) -> [Vec3; 4] {
@@ -92,15 +93,6 @@ pub fn per_ray_masks(
     super::parallel::per_texel(gbuffer, params, |x, y, texel| {
         per_ray_mask(bvh, texel, pixel_set(x, y), light_points, params)
     })
-}
-
-/// Fraction of a mask's 16 rays that reach the light (1 for sky pixels).
-pub fn visibility(mask: u32) -> f32 {
-    if mask & MASK_SKY != 0 {
-        1.0
-    } else {
-        (SAMPLES_PER_SET as u32 - (mask & MASK_FULL).count_ones()) as f32 / SAMPLES_PER_SET as f32
-    }
 }
 
 /// The reference tracer's oracle: per pixel, the number of the `points` (the same

@@ -6,10 +6,12 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use penumbra::bvh::{Bvh, BvhSettings};
+use penumbra::contract::layout::MASK_SKY;
 use penumbra::output::{read_float_image, read_hdr_image};
 use penumbra::pass_inputs::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
 use penumbra::reference::primary::primary_gbuffer;
-use penumbra::reference::shadow_per_ray::{MASK_SKY, per_ray_masks, shadow_params, visibility};
+use penumbra::reference::shadow_per_ray::{per_ray_masks, shadow_params};
+use penumbra::reference::visibility::visibility;
 use penumbra::{assets, sampling, scene::Scene};
 
 fn out_dir(name: &str) -> PathBuf {

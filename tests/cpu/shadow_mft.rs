@@ -8,13 +8,14 @@ use std::path::Path;
 
 use glam::Vec3;
 use penumbra::bvh::{Bvh, BvhSettings};
+use penumbra::contract::layout::MASK_FULL;
 use penumbra::pass_inputs::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
 use penumbra::reference::primary::primary_gbuffer;
 use penumbra::reference::shadow_mft::TileOptions;
 use penumbra::reference::shadow_mft::{Counters, mft_masks};
 use penumbra::reference::shadow_packet::packet_masks;
+use penumbra::reference::shadow_per_ray::per_ray_masks;
 use penumbra::reference::shadow_per_ray::{ITERATION_BUDGET, shadow_params};
-use penumbra::reference::shadow_per_ray::{MASK_FULL, per_ray_masks};
 use penumbra::scene::view::{Camera, QuadLight, View};
 use penumbra::{assets, sampling, scene::Scene};
 use support::{assert_masks_match_oracle, closed_room, rays_through_a_shared_edge, scene_from_triangles};

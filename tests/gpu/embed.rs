@@ -20,7 +20,7 @@ use penumbra::gpu::{
     SurfaceInput, VectorVariant, read_buffer,
 };
 use penumbra::reference::filter::discontinuity_filter;
-use penumbra::reference::shadow_per_ray::visibility;
+use penumbra::reference::visibility::visibility;
 use penumbra::scene::Scene;
 use penumbra::scene::view::View;
 use raster::{HostGBuffer, Rasterizer, camera_matrices};

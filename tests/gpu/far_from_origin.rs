@@ -32,7 +32,7 @@ fn visibility_image(scene: &Scene, view: &View, tracer: Tracer, origin: Option<V
     frame
         .masks
         .iter()
-        .map(|&m| penumbra::reference::shadow_per_ray::visibility(m))
+        .map(|&m| penumbra::reference::visibility::visibility(m))
         .collect()
 }
 
@@ -56,7 +56,7 @@ fn differences(a: &[f32], b: &[f32]) -> (usize, usize) {
 /// there. A fixed ray offset (10⁻⁴ of the diagonal, 17 mm) is below a few f32 steps at
 /// 1e6 (6.25 cm each), so rays started inside their own surface and 0.7 % of the pixels
 /// darkened; origins now clear the surface by 4 f32 steps of the point
-/// (frame::shadow_ray_origin), above the rounding of a hit point (at most ~2.6 steps).
+/// (pass_inputs::shadow_ray_origin), above the rounding of a hit point (at most ~2.6 steps).
 #[test]
 fn far_scenes_trace_as_their_stored_geometry_does_at_the_origin() {
     let (base_scene, base_view) = embedded("playground");

@@ -8,10 +8,11 @@ use std::time::Instant;
 
 use glam::Vec3;
 use penumbra::bvh::{Bvh, BvhSettings};
+use penumbra::contract::layout::MASK_FULL;
 use penumbra::contract::layout::{GBufferTexel, ShadowParams};
 use penumbra::gpu::{FrameSettings, GpuScene, LeafMode, Renderer, RendererOptions};
 use penumbra::reference::shadow_mft::{Counters, Frustum, TileOptions, mft_masks, trace_tile};
-use penumbra::reference::shadow_per_ray::{ITERATION_BUDGET, MASK_FULL, per_ray_masks, shadow_params};
+use penumbra::reference::shadow_per_ray::{ITERATION_BUDGET, per_ray_masks, shadow_params};
 use penumbra::sampling;
 use penumbra::scene::Scene;
 use penumbra::scene::view::{QuadLight, View};

@@ -14,8 +14,8 @@ use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::contract::counters::Counters;
 use penumbra::contract::layout::{CameraParams, GBufferTexel};
 use penumbra::gpu::{
-    FrameSettings, GpuScene, PrimaryPass, PrimaryTracer, Renderer, RendererOptions, VectorVariant,
-    empty_storage_buffer, read_buffer,
+    FrameSettings, GpuScene, PrimaryOptions, PrimaryPass, PrimaryTracer, Renderer, RendererOptions,
+    VectorVariant, empty_storage_buffer, read_buffer,
 };
 use penumbra::pass_inputs::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
 use penumbra::reference::primary::primary_gbuffer_counted;
@@ -91,7 +91,9 @@ fn gpu_gbuffer(pass: &PrimaryPass, case: &Case) -> (Vec<GBufferTexel>, penumbra:
     let gpu_scene = GpuScene::new(ctx(), &case.scene, &case.bvh).unwrap();
     let bytes = u64::from(case.cam.width * case.cam.height) * size_of::<GBufferTexel>() as u64;
     let gbuffer = empty_storage_buffer(ctx(), "G-buffer", bytes, wgpu::BufferUsages::COPY_SRC).unwrap();
-    let result = pass.run(ctx(), &gpu_scene, &case.cam, &gbuffer, None);
+    let result = pass
+        .run(ctx(), &gpu_scene, &case.cam, &gbuffer, None)
+        .and_then(|s| s.check());
     (read_buffer(ctx(), &gbuffer, 0..bytes).unwrap(), result)
 }
 
@@ -159,13 +161,30 @@ fn assert_close(label: &str, gpu: &[GBufferTexel], cpu: &[GBufferTexel], diagona
 #[test]
 fn mft_equals_per_ray_and_cpu_twins() {
     let start = std::time::Instant::now();
-    let per_ray = PrimaryPass::new(ctx(), PrimaryTracer::PerRay, None, true).unwrap();
+    let per_ray = PrimaryPass::new(
+        ctx(),
+        &PrimaryOptions {
+            tracer: PrimaryTracer::PerRay,
+            counters: true,
+            ..PrimaryOptions::default()
+        },
+    )
+    .unwrap();
     let mft: Vec<(VectorVariant, PrimaryPass)> = variants()
         .into_iter()
         .map(|v| {
             (
                 v,
-                PrimaryPass::new(ctx(), PrimaryTracer::Mft, Some(v), true).unwrap(),
+                PrimaryPass::new(
+                    ctx(),
+                    &PrimaryOptions {
+                        tracer: PrimaryTracer::Mft,
+                        variant: Some(v),
+                        counters: true,
+                        ..PrimaryOptions::default()
+                    },
+                )
+                .unwrap(),
             )
         })
         .collect();
@@ -281,13 +300,30 @@ fn counted(triangles: &[[Vec3; 3]; 2]) -> Vec<(String, Counters)> {
             primary_mft_gbuffer(&case.bvh, &shading, &case.cam, ITERATION_BUDGET).counters,
         ),
     ];
-    let pass = PrimaryPass::new(ctx(), PrimaryTracer::PerRay, None, true).unwrap();
+    let pass = PrimaryPass::new(
+        ctx(),
+        &PrimaryOptions {
+            tracer: PrimaryTracer::PerRay,
+            counters: true,
+            ..PrimaryOptions::default()
+        },
+    )
+    .unwrap();
     out.push((
         "per-ray GPU".to_owned(),
         gpu_gbuffer(&pass, &case).1.unwrap().unwrap(),
     ));
     for v in variants() {
-        let pass = PrimaryPass::new(ctx(), PrimaryTracer::Mft, Some(v), true).unwrap();
+        let pass = PrimaryPass::new(
+            ctx(),
+            &PrimaryOptions {
+                tracer: PrimaryTracer::Mft,
+                variant: Some(v),
+                counters: true,
+                ..PrimaryOptions::default()
+            },
+        )
+        .unwrap();
         out.push((
             format!("frusta GPU {v}"),
             gpu_gbuffer(&pass, &case).1.unwrap().unwrap(),
@@ -380,8 +416,16 @@ fn running_out_of_iterations_is_an_error() {
         .find(|(_, t)| t.overflow_pixels > 0 && t.overflow_pixels < 37 * 23)
         .expect("a budget that stops some vectors but not all");
     for v in variants() {
-        let pass =
-            PrimaryPass::with_iteration_budget(ctx(), PrimaryTracer::Mft, Some(v), false, budget).unwrap();
+        let pass = PrimaryPass::new(
+            ctx(),
+            &PrimaryOptions {
+                tracer: PrimaryTracer::Mft,
+                variant: Some(v),
+                iteration_budget: budget,
+                ..PrimaryOptions::default()
+            },
+        )
+        .unwrap();
         let gpu_scene = GpuScene::new(ctx(), &case.scene, &case.bvh).unwrap();
         let bytes = u64::from(37 * 23u32) * size_of::<GBufferTexel>() as u64;
         let gbuffer = empty_storage_buffer(ctx(), "G-buffer", bytes, wgpu::BufferUsages::empty()).unwrap();
@@ -409,6 +453,7 @@ fn running_out_of_iterations_is_an_error() {
         );
         let err = pass
             .run(ctx(), &gpu_scene, &case.cam, &gbuffer, None)
+            .and_then(|s| s.check())
             .unwrap_err();
         assert!(
             err.to_string().contains("ran out of their loop iterations"),
@@ -420,7 +465,15 @@ fn running_out_of_iterations_is_an_error() {
             37 * 23
         );
     }
-    let pass = PrimaryPass::with_iteration_budget(ctx(), PrimaryTracer::PerRay, None, false, 1).unwrap();
+    let pass = PrimaryPass::new(
+        ctx(),
+        &PrimaryOptions {
+            tracer: PrimaryTracer::PerRay,
+            iteration_budget: 1,
+            ..PrimaryOptions::default()
+        },
+    )
+    .unwrap();
     let err = gpu_gbuffer(&pass, &case).1.unwrap_err();
     assert!(
         err.to_string().contains("ran out of their loop iterations"),
@@ -428,7 +481,15 @@ fn running_out_of_iterations_is_an_error() {
     );
     // A budget past lavapipe's loop limit is allowed (a loop the driver ends is then an
     // error: a_loop_the_driver_ends_is_an_error_never_a_wrong_gbuffer); none at all is not.
-    let err = PrimaryPass::with_iteration_budget(ctx(), PrimaryTracer::Mft, None, false, 0).unwrap_err();
+    let err = PrimaryPass::new(
+        ctx(),
+        &PrimaryOptions {
+            tracer: PrimaryTracer::Mft,
+            iteration_budget: 0,
+            ..PrimaryOptions::default()
+        },
+    )
+    .unwrap_err();
     assert!(matches!(err, penumbra::Error::InvalidValue { .. }), "{err:?}");
 }
 
@@ -528,7 +589,16 @@ fn a_loop_the_driver_ends_is_an_error_never_a_wrong_gbuffer() {
     let mut runs = vec![(PrimaryTracer::PerRay, None)];
     runs.extend(variants().into_iter().map(|v| (PrimaryTracer::Mft, Some(v))));
     for (tracer, variant) in runs {
-        let pass = PrimaryPass::with_iteration_budget(ctx(), tracer, variant, false, 1 << 30).unwrap();
+        let pass = PrimaryPass::new(
+            ctx(),
+            &PrimaryOptions {
+                tracer,
+                variant,
+                iteration_budget: 1 << 30,
+                ..PrimaryOptions::default()
+            },
+        )
+        .unwrap();
         let label = format!("{tracer:?} {variant:?}");
         let (gbuffer, result) = gpu_gbuffer(&pass, &case);
         match result {

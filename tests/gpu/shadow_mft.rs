@@ -131,7 +131,7 @@ fn transposed_leaves_resume_after_suspension_with_the_same_masks() {
                 shrink,
                 ..TracerOptions::default()
             };
-            let pass = ShadowTracer::with_options(ctx(), &options).unwrap();
+            let pass = ShadowTracer::new(ctx(), &options).unwrap();
             // An odd budget far below a tile's work: tiles stop at every kind of step.
             let mut uninterrupted: Option<Vec<u32>> = None;
             for budget in [ITERATION_BUDGET, 97] {

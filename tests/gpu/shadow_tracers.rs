@@ -7,6 +7,7 @@ use crate::support;
 use glam::Vec3;
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::contract::layout::GBufferTexel;
+use penumbra::contract::layout::MASK_FULL;
 use penumbra::gpu::{
     FrameSettings, GpuScene, LeafMode, Renderer, RendererOptions, ShadowTracer, Tracer, TracerOptions,
     VectorVariant,
@@ -14,7 +15,7 @@ use penumbra::gpu::{
 use penumbra::reference::counters::Counters;
 use penumbra::reference::shadow_mft::{TileOptions, mft_masks};
 use penumbra::reference::shadow_packet::packet_masks;
-use penumbra::reference::shadow_per_ray::{ITERATION_BUDGET, MASK_FULL, reference_counts, shadow_params};
+use penumbra::reference::shadow_per_ray::{ITERATION_BUDGET, reference_counts, shadow_params};
 use penumbra::scene::Scene;
 use penumbra::scene::view::{QuadLight, View};
 use penumbra::{assets, sampling};
@@ -137,7 +138,7 @@ fn run_counted(
     view: &View,
     (w, h): (u32, u32),
 ) -> (Vec<u32>, Counters) {
-    let pass = ShadowTracer::with_options(
+    let pass = ShadowTracer::new(
         ctx(),
         &TracerOptions {
             tracer,
@@ -385,7 +386,7 @@ fn shadow_tracer(tracer: Tracer, leaf_mode: LeafMode, variant: VectorVariant) ->
         leaf_mode,
         ..TracerOptions::default()
     };
-    ShadowTracer::with_options(ctx(), &options).unwrap()
+    ShadowTracer::new(ctx(), &options).unwrap()
 }
 
 /// A 4×4 tile of ground points within 0.0075 of the origin (the ray offset above it)
@@ -508,10 +509,10 @@ fn a_closed_room_lit_from_outside_is_dark_for_every_tracer() {
 /// after one dispatch of the embedded recording path, whose scratch the test can read.
 #[test]
 fn a_suspended_tile_saves_the_state_the_twin_saves() {
+    use penumbra::contract::shadow::STATE_WORDS;
+    use penumbra::contract::suspend::STATUS_SUSPENDED;
     use penumbra::gpu::ShadowScratch;
-    use penumbra::reference::shadow_mft::{
-        Frustum, STATE_WORDS, STATUS_SUSPENDED, TileOptions, TileRun, dispatch_tile,
-    };
+    use penumbra::reference::shadow_mft::{Frustum, TileOptions, TileRun, dispatch_tile};
     let (w, h) = (24, 20);
     let (_, view, bvh, gpu_scene, texels) = traced_gbuffer("lattice", w, h);
     let points = sampling::light_points(&view.light);
@@ -533,7 +534,7 @@ fn a_suspended_tile_saves_the_state_the_twin_saves() {
                 leaf_mode,
                 ..TracerOptions::default()
             };
-            let pass = ShadowTracer::with_options(ctx(), &options).unwrap();
+            let pass = ShadowTracer::new(ctx(), &options).unwrap();
             let scratch = ShadowScratch::new(&ctx().device, w, h);
             let mut encoder = ctx().device.create_command_encoder(&Default::default());
             let image = penumbra::gpu::ShadowImage {

@@ -273,7 +273,7 @@ pub fn compare_masks(
 ) -> MaskComparison {
     let mut out = MaskComparison::default();
     for (p, (&ma, &mb)) in a.iter().zip(b).enumerate() {
-        if (ma | mb) & penumbra::reference::shadow_per_ray::MASK_SKY != 0 {
+        if (ma | mb) & penumbra::contract::layout::MASK_SKY != 0 {
             if ma != mb {
                 out.unexplained
                     .push(format!("pixel {p}: sky flag differs ({ma:#x} vs {mb:#x})"));

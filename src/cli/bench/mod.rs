@@ -11,14 +11,14 @@ use std::path::PathBuf;
 
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::contract::layout::GBufferTexel;
+use penumbra::contract::layout::MASK_SKY;
 use penumbra::gpu::MotionSettings;
 use penumbra::gpu::animate::{animate_instance, default_moving_instance};
 use penumbra::gpu::{
-    FrameSettings, GpuContext, GpuOptions, GpuScene, GpuTimer, PrimaryPass, PrimaryTracer, Renderer,
-    RendererOptions, Tracer, empty_storage_buffer,
+    FrameSettings, GpuContext, GpuOptions, GpuScene, GpuTimer, PrimaryOptions, PrimaryPass, PrimaryTracer,
+    Renderer, RendererOptions, Tracer, empty_storage_buffer,
 };
 use penumbra::pass_inputs::{RAY_OFFSET_FRACTION, camera_params};
-use penumbra::reference::shadow_per_ray::MASK_SKY;
 use penumbra::scene::Scene;
 use penumbra::scene::view::View;
 use penumbra::{Error, Result};
@@ -305,13 +305,20 @@ fn bench_primary(
     )?;
     let mut out = Vec::new();
     for tracer in [PrimaryTracer::Mft, PrimaryTracer::PerRay] {
-        let pass = PrimaryPass::new(ctx, tracer, args.vector.forced(), false)?;
+        let pass = PrimaryPass::new(
+            ctx,
+            &PrimaryOptions {
+                tracer,
+                variant: args.vector.forced(),
+                ..PrimaryOptions::default()
+            },
+        )?;
         let mut times = Vec::new();
         let mut ran_out_pixels = 0;
         for run in 0..=args.runs {
             progress!("\rprimary {tracer:?}: run {run}/{}   ", args.runs);
             let mut timer = GpuTimer::new(ctx, 4);
-            let status = pass.run_with_status(ctx, scene, &camera, &gbuffer, Some(&mut timer))?;
+            let status = pass.run(ctx, scene, &camera, &gbuffer, Some(&mut timer))?;
             if tracer == PrimaryTracer::Mft && status.overflow_pixels > 0 {
                 // Frusta of a small image's blocks can meet more of the scene than a
                 // vector's loop may visit; the renderer falls back to per-ray there.
@@ -326,8 +333,17 @@ fn bench_primary(
         let counters = if args.no_counters || ran_out_pixels > 0 {
             None
         } else {
-            PrimaryPass::new(ctx, tracer, args.vector.forced(), true)?
-                .run(ctx, scene, &camera, &gbuffer, None)?
+            PrimaryPass::new(
+                ctx,
+                &PrimaryOptions {
+                    tracer,
+                    variant: args.vector.forced(),
+                    counters: true,
+                    ..PrimaryOptions::default()
+                },
+            )?
+            .run(ctx, scene, &camera, &gbuffer, None)?
+            .check()?
         };
         out.push(PrimaryResult {
             tracer: match tracer {

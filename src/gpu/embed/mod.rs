@@ -52,17 +52,16 @@ mod targets;
 pub use inputs::{ShadowInputs, SurfaceInput};
 pub use targets::{ShadowTargets, VISIBILITY_FORMAT};
 
-use glam::Vec3;
-
 use super::kernel::{Checks, Kernel, buffer, texture, uniform_buffer_on};
 use super::shadow_stages::{ShadowStages, VisibilityStage};
 use super::{GpuContext, GpuScene, LeafMode, ShadowImage, TracerOptions, VectorVariant};
+use crate::contract::ITERATION_BUDGET;
 use crate::contract::filter::FilterParams;
+use crate::contract::groups::PIXEL_GROUP;
 use crate::contract::layout::{ImageSize, SurfaceParams};
 use crate::contract::shadow::shadow_params;
-use crate::contract::{ITERATION_BUDGET, PIXEL_GROUP};
 use crate::pass_inputs::RAY_OFFSET_FRACTION;
-use crate::{Error, Result, sampling};
+use crate::{Error, Result};
 
 /// How the embedded pass traces and filters. Rays per pixel are fixed at 16 (one sample
 /// set of the 256-point pattern; the filter's 4-pixel box gathers all 256).
@@ -271,7 +270,7 @@ impl ShadowPass {
             corner: inputs.light.corner - scene.origin,
             ..*inputs.light
         };
-        let light_points = light_points_buffer(device, &light);
+        let light_points = self.stages.tracer.light_points_buffer(device, &light);
         let mut shadow = shadow_params(&light, w, h);
         shadow.iteration_budget = self.settings.iteration_budget.max(1);
         let image = ShadowImage {
@@ -335,20 +334,6 @@ impl ShadowPass {
             .record(encoder, "embed/visibility", &bind, None, groups);
         Ok(())
     }
-}
-
-/// The 256 light points as the shadow kernel reads them (`vec4` each, w unused).
-fn light_points_buffer(device: &wgpu::Device, light: &crate::scene::view::QuadLight) -> wgpu::Buffer {
-    use wgpu::util::DeviceExt;
-    let points: Vec<[f32; 4]> = sampling::light_points(light)
-        .iter()
-        .map(|p: &Vec3| p.extend(0.0).to_array())
-        .collect();
-    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("light points"),
-        contents: bytemuck::cast_slice(&points),
-        usage: wgpu::BufferUsages::STORAGE,
-    })
 }
 
 /// [`Error::DeviceUnsupported`] unless `device` has the pass's features and limits (and

@@ -1,4 +1,5 @@
-// Per-frame structs shared by the primary, shadow and shade passes.
+// The per-pixel structs and mask words the primary, shadow and shade passes share, and two
+// per-pixel formulas they all use (the shadow-ray origin, the unshadowed irradiance).
 // Mirrors `src/contract/layout.rs` (GBufferTexel, ShadowParams); a naga test checks sizes and offsets.
 
 // Shadow mask words: bit j = ray j blocked (MASK_FULL: all 16), MASK_SKY = the pixel
@@ -93,10 +94,10 @@ struct ShadeParams {
 // fraction of its size) or by this many steps of f32 at the point's largest coordinate,
 // whichever is larger: far from the origin the hit point itself is only known to a step
 // or two, and a fixed offset below that lets rays hit their own surface. Twin:
-// frame::ORIGIN_OFFSET_ULPS (a test checks they agree).
+// contract::layout::ORIGIN_OFFSET_ULPS (a test checks they agree).
 const ORIGIN_OFFSET_ULPS: f32 = 4.0;
 
-// The shadow-ray origin of the surface point `point`; twin of frame::shadow_ray_origin.
+// The shadow-ray origin of the surface point `point`; twin of pass_inputs::shadow_ray_origin.
 fn shadow_ray_origin(point: vec3<f32>, normal: vec3<f32>, ray_offset: f32) -> vec3<f32> {
     let m = max(max(abs(point.x), abs(point.y)), abs(point.z));
     // The spacing of f32 values at m: 2^(m's exponent) * 2^-23.
