@@ -1,5 +1,7 @@
 //! WGSL assembly: the files under `shaders/`, embedded in the binary, joined by a tiny
 //! `#import` resolver, and validated with naga (in a plain `cargo test`, no GPU needed).
+//! One concept: the shader table and its assembly and, below them, the tests that hold
+//! every shader to the conventions (validation, variants, headers, twins).
 //!
 //! A kernel file imports shared modules one per line:
 //!
