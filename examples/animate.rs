@@ -19,6 +19,8 @@ use penumbra::gpu::{GpuContext, GpuOptions, MotionSettings};
 use penumbra::scene::Scene;
 
 fn main() {
+    // SAFETY: first thing in main, before any thread or Vulkan instance exists.
+    unsafe { penumbra::gpu::set_driver_defaults() };
     if let Err(e) = run() {
         eprintln!("error: {e}");
         std::process::exit(1);

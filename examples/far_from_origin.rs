@@ -22,6 +22,8 @@ use penumbra::scene::Scene;
 use penumbra::scene::view::View;
 
 fn main() -> penumbra::Result<()> {
+    // SAFETY: first thing in main, before any thread or Vulkan instance exists.
+    unsafe { penumbra::gpu::set_driver_defaults() };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (mut scene, mut view, rest) = match args.as_slice() {
         [s, v, rest @ ..] if !s.chars().all(|c| c.is_ascii_digit() || c == '.') => {

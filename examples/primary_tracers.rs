@@ -19,6 +19,8 @@ use penumbra::scene::Scene;
 use penumbra::scene::view::View;
 
 fn main() -> penumbra::Result<()> {
+    // SAFETY: first thing in main, before any thread or Vulkan instance exists.
+    unsafe { penumbra::gpu::set_driver_defaults() };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let [scene_path, view_path, rest @ ..] = args.as_slice() else {
         eprintln!("usage: primary_tracers SCENE VIEW [SIZE] [RUNS] [LEAF]");

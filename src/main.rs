@@ -18,6 +18,8 @@ use clap::Parser;
 static LAST_PANIC: Mutex<Option<String>> = Mutex::new(None);
 
 fn main() -> ExitCode {
+    // SAFETY: first thing in main, before any thread or Vulkan instance exists.
+    unsafe { penumbra::gpu::set_driver_defaults() };
     let args = cli::Cli::parse();
     let verbose = args.verbose;
     std::panic::set_hook(Box::new(move |info| {

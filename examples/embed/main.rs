@@ -44,6 +44,8 @@ struct Lighting {
 const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 fn main() {
+    // SAFETY: first thing in main, before any thread or Vulkan instance exists.
+    unsafe { penumbra::gpu::set_driver_defaults() };
     if let Err(e) = run() {
         eprintln!("error: {e}");
         std::process::exit(1);

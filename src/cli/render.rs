@@ -151,7 +151,7 @@ pub struct RenderArgs {
     leaf_mode: LeafModeArg,
     /// Camera rays: per-ray (one invocation per pixel) or mft (16 frusta of 4x4 pixels
     /// per 16-wide vector); the same G-buffer either way.
-    #[arg(long, value_enum, default_value_t = PrimaryArg::PerRay)]
+    #[arg(long, value_enum, default_value_t = PrimaryArg::Mft)]
     primary: PrimaryArg,
     /// MFT: do not shrink frusta to their still-active rays (at the start and after a
     /// leaf that blocked some: the paper's "CR" frustum shrinking, on by default; same

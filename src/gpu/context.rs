@@ -7,6 +7,48 @@ use crate::{Error, Result};
 /// Environment variable that picks the adapter when [`GpuOptions::adapter`] is `None`.
 pub const ADAPTER_ENV: &str = "PENUMBRA_ADAPTER";
 
+/// Environment variable Mesa's lavapipe reads when its driver loads: the width in bits of
+/// its SIMD vectors, which sets its subgroup size (256, the default: 8 lanes; 512: 16).
+pub const LAVAPIPE_VECTOR_WIDTH_ENV: &str = "LP_NATIVE_VECTOR_WIDTH";
+
+/// Environment variable that turns off Mesa's device-selection layer
+/// (`VK_LAYER_MESA_device_select`, an implicit Vulkan layer).
+pub const NO_DEVICE_SELECT_ENV: &str = "NODEVICE_SELECT";
+
+/// Sets two driver defaults for this process where the user has not set them, and returns
+/// the names of the variables it set:
+///
+/// - [`LAVAPIPE_VECTOR_WIDTH_ENV`]` = 512`: 16-wide lavapipe subgroups. At the default 8
+///   lanes the kernels' 16-wide vector cannot live in one subgroup and falls back to the
+///   workgroup vector, several times slower (README "Performance"); 16 lanes work on AVX2
+///   as on AVX-512 CPUs (LLVM splits the vectors). Other drivers ignore it.
+/// - [`NO_DEVICE_SELECT_ENV`]` = 1` when there is no `XDG_RUNTIME_DIR` (a headless
+///   machine) and the user has not asked Mesa for a device (`MESA_VK_DEVICE_SELECT`): the
+///   device-selection layer connects to a Wayland display while listing devices, and there
+///   libwayland prints "error: XDG_RUNTIME_DIR is invalid or not set in the environment."
+///   twice; penumbra picks its adapter itself ([`GpuOptions`]), so the layer has nothing to do.
+///
+/// # Safety
+///
+/// It sets process environment variables ([`std::env::set_var`]): call it first thing in
+/// `main`, while no other thread runs, and before the first Vulkan instance is created
+/// (the driver and the loader read them when they load, once per process).
+pub unsafe fn set_driver_defaults() -> Vec<&'static str> {
+    let unset = |name: &str| std::env::var_os(name).is_none_or(|v| v.is_empty());
+    let mut set = Vec::new();
+    if unset(LAVAPIPE_VECTOR_WIDTH_ENV) {
+        set.push((LAVAPIPE_VECTOR_WIDTH_ENV, "512"));
+    }
+    if unset("XDG_RUNTIME_DIR") && unset("MESA_VK_DEVICE_SELECT") && unset(NO_DEVICE_SELECT_ENV) {
+        set.push((NO_DEVICE_SELECT_ENV, "1"));
+    }
+    for &(name, value) in &set {
+        // SAFETY: the caller guarantees that no other thread runs.
+        unsafe { std::env::set_var(name, value) };
+    }
+    set.into_iter().map(|(name, _)| name).collect()
+}
+
 /// How to choose the GPU.
 #[derive(Clone, Debug, Default)]
 pub struct GpuOptions {
@@ -107,16 +149,20 @@ impl GpuContext {
     /// Vulkan adapters come first (lavapipe in tests and CI); other backends are used when
     /// Vulkan has none. `SUBGROUP` and `TIMESTAMP_QUERY` are enabled where offered.
     pub fn new(opts: &GpuOptions) -> Result<GpuContext> {
-        // WGPU_DEBUG / WGPU_VALIDATION and backend options still come from the environment.
-        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle().with_env();
-        desc.backends = wgpu::Backends::all();
-        let instance = wgpu::Instance::new(desc);
-        let adapters = enumerate(&instance);
-
         let wanted = match &opts.adapter {
             Some(w) => Some(w.clone()),
             None => std::env::var(ADAPTER_ENV).ok().filter(|w| !w.trim().is_empty()),
         };
+        // The other backends are asked only when Vulkan has no adapter or one is named: the
+        // GL backend probes for a Wayland display, and on a headless machine libwayland
+        // prints "error: XDG_RUNTIME_DIR is invalid or not set" twice, although the
+        // renderer never presents.
+        let mut instance = new_instance(wgpu::Backends::VULKAN);
+        let mut adapters = enumerate(&instance, wgpu::Backends::VULKAN);
+        if adapters.is_empty() || wanted.is_some() {
+            instance = new_instance(wgpu::Backends::all());
+            adapters = enumerate(&instance, wgpu::Backends::all());
+        }
         let adapter = match wanted {
             Some(wanted) => pick_named(&adapters, &wanted)?,
             None => pick_auto(&adapters)?,
@@ -171,12 +217,22 @@ impl GpuContext {
     }
 }
 
-/// All adapters, Vulkan ones first, each group in the order the backend reports them.
-fn enumerate(instance: &wgpu::Instance) -> Vec<wgpu::Adapter> {
-    let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
-    adapters.extend(pollster::block_on(
-        instance.enumerate_adapters(wgpu::Backends::all() - wgpu::Backends::VULKAN),
-    ));
+/// An instance of `backends`, without window-system support (the renderer never presents);
+/// WGPU_DEBUG / WGPU_VALIDATION and backend options still come from the environment.
+fn new_instance(backends: wgpu::Backends) -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle().with_env();
+    desc.backends = backends;
+    wgpu::Instance::new(desc)
+}
+
+/// The adapters of `backends`, Vulkan ones first, each group in the order the backend
+/// reports them.
+fn enumerate(instance: &wgpu::Instance, backends: wgpu::Backends) -> Vec<wgpu::Adapter> {
+    let mut adapters = pollster::block_on(instance.enumerate_adapters(backends & wgpu::Backends::VULKAN));
+    let others = backends - wgpu::Backends::VULKAN;
+    if !others.is_empty() {
+        adapters.extend(pollster::block_on(instance.enumerate_adapters(others)));
+    }
     adapters
 }
 

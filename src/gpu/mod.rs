@@ -31,7 +31,10 @@ mod timer;
 mod vector_variant;
 
 pub use buffers::{empty_storage_buffer, read_buffer, storage_buffer};
-pub use context::{ADAPTER_ENV, AdapterSummary, GpuContext, GpuOptions};
+pub use context::{
+    ADAPTER_ENV, AdapterSummary, GpuContext, GpuOptions, LAVAPIPE_VECTOR_WIDTH_ENV, NO_DEVICE_SELECT_ENV,
+    set_driver_defaults,
+};
 pub use embed::{ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, SurfaceInput, VISIBILITY_FORMAT};
 pub use frame::Frame;
 pub use motion::{MotionSettings, MotionUpdate};

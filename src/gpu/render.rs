@@ -58,6 +58,7 @@ impl Renderer {
                 PrimaryTracer::Mft => Some(PrimaryPass::new(
                     ctx,
                     &PrimaryOptions {
+                        tracer: PrimaryTracer::PerRay,
                         counters: options.counters,
                         ..PrimaryOptions::default()
                     },

@@ -52,6 +52,35 @@ fn render_without_arguments_writes_penumbra_png() {
     assert_eq!((image.width, image.height), (512, 512));
 }
 
+/// With nothing set in the environment, `render` on lavapipe gets 16-wide subgroups (the
+/// binary sets `LP_NATIVE_VECTOR_WIDTH=512` itself), so it runs the subgroup vector and
+/// says so; and on a headless machine the Vulkan stack prints nothing to stderr.
+#[test]
+fn render_on_lavapipe_runs_the_subgroup_vector_without_any_setting() {
+    let dir = out_dir("default-vector");
+    let out = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .args(["render", "--size", "64x64"])
+        .env_remove(penumbra::gpu::LAVAPIPE_VECTOR_WIDTH_ENV)
+        .env_remove(penumbra::gpu::NO_DEVICE_SELECT_ENV)
+        .env_remove("XDG_RUNTIME_DIR")
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stdout}\n{stderr}");
+    let adapter = stdout.lines().find(|l| l.starts_with("adapter")).unwrap();
+    if adapter.contains("llvmpipe") {
+        assert!(
+            stdout.contains("vector subgroup") && adapter.contains("subgroups 16..16"),
+            "lavapipe without LP_NATIVE_VECTOR_WIDTH should run 16-wide:\n{stdout}"
+        );
+        assert!(stderr.trim().is_empty(), "stderr of a headless render:\n{stderr}");
+    } else {
+        eprintln!("not lavapipe ({adapter}): the 16-wide default does not apply");
+    }
+}
+
 #[test]
 fn generated_scenes_to_png_and_exr_with_visibility_close_to_the_oracle() {
     for s in assets::EMBEDDED_SCENES {

@@ -161,6 +161,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             let frame_settings = FrameSettings::new(w, h);
             let mut tracer_results = Vec::new();
             let mut primary = Vec::new();
+            // The MFT renderer's frames (the first renderer): every pass, and the wall time.
+            let (mut shade, mut filter, mut wall) = (Vec::new(), Vec::new(), Vec::new());
             let mut rays = 0;
             for (tracer, renderer, counting) in &renderers {
                 step += 1;
@@ -179,10 +181,17 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                         },
                         ""
                     );
+                    let start = std::time::Instant::now();
                     let frame = renderer.render(&ctx, &gpu_scene, &case.view, &frame_settings)?;
+                    let wall_ms = start.elapsed().as_secs_f64() * 1e3;
                     if run > 0 {
                         times.push(frame.pass_ms("shadow"));
-                        primary.push(frame.pass_ms("primary"));
+                        if tracer_results.is_empty() {
+                            primary.push(frame.pass_ms("primary"));
+                            shade.push(frame.pass_ms("shade"));
+                            filter.push(frame.pass_ms("filter"));
+                            wall.push(wall_ms);
+                        }
                     }
                     rays = frame.masks.iter().filter(|&&m| m & MASK_SKY == 0).count() as u64 * 16;
                 }
@@ -259,6 +268,15 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 height: h,
                 shadow_rays: rays,
                 primary_ms_median: median(&primary),
+                frame: FrameResult {
+                    primary_ms_median: median(&primary),
+                    shadow_ms_median: tracer_results[0].shadow_ms_median,
+                    shade_ms_median: median(&shade),
+                    filter_ms_median: median(&filter),
+                    wall_ms_min: wall.iter().copied().fold(f64::INFINITY, f64::min),
+                    wall_ms_median: median(&wall),
+                    wall_ms: wall,
+                },
                 primary: primary_results,
                 tracers: tracer_results,
                 animation,

@@ -17,6 +17,19 @@ pub(super) struct TracerResult {
     pub(super) counters: Option<Counters>,
 }
 
+/// A frame's passes (GPU ms, medians over the runs) and its wall time (ms, from the start
+/// of `Renderer::render` to the frame read back).
+#[derive(Debug, Serialize)]
+pub(super) struct FrameResult {
+    pub(super) primary_ms_median: f64,
+    pub(super) shadow_ms_median: f64,
+    pub(super) shade_ms_median: f64,
+    pub(super) filter_ms_median: f64,
+    pub(super) wall_ms: Vec<f64>,
+    pub(super) wall_ms_min: f64,
+    pub(super) wall_ms_median: f64,
+}
+
 /// One primary tracer's figures in one case.
 #[derive(Debug, Serialize)]
 pub(super) struct PrimaryResult {
@@ -92,6 +105,9 @@ pub(super) struct CaseResult {
     pub(super) height: u32,
     pub(super) shadow_rays: u64,
     pub(super) primary_ms_median: f64,
+    /// The whole frame as `render` makes it with MFT shadows (default settings: filter on,
+    /// no refinement): every pass's GPU time and the wall time.
+    pub(super) frame: FrameResult,
     pub(super) primary: Vec<PrimaryResult>,
     pub(super) tracers: Vec<TracerResult>,
     /// The moving-object case, when the scene has an object to move.
@@ -150,6 +166,17 @@ pub(super) fn print_case(r: &CaseResult) {
         r.height,
         r.shadow_rays as f64 / 1e6,
         r.primary_ms_median
+    );
+    let f = &r.frame;
+    println!(
+        "  frame (mft, filtered): primary {:.1} + shadow {:.1} + shade {:.1} + filter {:.1} ms GPU; \
+         wall {:.1} ms min, {:.1} ms median (with readback)",
+        f.primary_ms_median,
+        f.shadow_ms_median,
+        f.shade_ms_median,
+        f.filter_ms_median,
+        f.wall_ms_min,
+        f.wall_ms_median
     );
     println!(
         "  {:<8} {:>10} {:>10} {:>8} {:>9} {:>11} {:>11} {:>11} {:>11}",
