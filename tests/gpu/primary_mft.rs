@@ -158,35 +158,24 @@ fn assert_close(label: &str, gpu: &[GBufferTexel], cpu: &[GBufferTexel], diagona
     differ
 }
 
+/// The pass of `tracer` (vector `variant`) with its work counters compiled in.
+fn counting_pass(tracer: PrimaryTracer, variant: Option<VectorVariant>) -> PrimaryPass {
+    let options = PrimaryOptions {
+        tracer,
+        variant,
+        counters: true,
+        ..PrimaryOptions::default()
+    };
+    PrimaryPass::new(ctx(), &options).unwrap()
+}
+
 #[test]
 fn mft_equals_per_ray_and_cpu_twins() {
     let start = std::time::Instant::now();
-    let per_ray = PrimaryPass::new(
-        ctx(),
-        &PrimaryOptions {
-            tracer: PrimaryTracer::PerRay,
-            counters: true,
-            ..PrimaryOptions::default()
-        },
-    )
-    .unwrap();
+    let per_ray = counting_pass(PrimaryTracer::PerRay, None);
     let mft: Vec<(VectorVariant, PrimaryPass)> = variants()
         .into_iter()
-        .map(|v| {
-            (
-                v,
-                PrimaryPass::new(
-                    ctx(),
-                    &PrimaryOptions {
-                        tracer: PrimaryTracer::Mft,
-                        variant: Some(v),
-                        counters: true,
-                        ..PrimaryOptions::default()
-                    },
-                )
-                .unwrap(),
-            )
-        })
+        .map(|v| (v, counting_pass(PrimaryTracer::Mft, Some(v))))
         .collect();
     for case in cases() {
         let label = &case.name;
@@ -300,30 +289,13 @@ fn counted(triangles: &[[Vec3; 3]; 2]) -> Vec<(String, Counters)> {
             primary_mft_gbuffer(&case.bvh, &shading, &case.cam, ITERATION_BUDGET).counters,
         ),
     ];
-    let pass = PrimaryPass::new(
-        ctx(),
-        &PrimaryOptions {
-            tracer: PrimaryTracer::PerRay,
-            counters: true,
-            ..PrimaryOptions::default()
-        },
-    )
-    .unwrap();
+    let pass = counting_pass(PrimaryTracer::PerRay, None);
     out.push((
         "per-ray GPU".to_owned(),
         gpu_gbuffer(&pass, &case).1.unwrap().unwrap(),
     ));
     for v in variants() {
-        let pass = PrimaryPass::new(
-            ctx(),
-            &PrimaryOptions {
-                tracer: PrimaryTracer::Mft,
-                variant: Some(v),
-                counters: true,
-                ..PrimaryOptions::default()
-            },
-        )
-        .unwrap();
+        let pass = counting_pass(PrimaryTracer::Mft, Some(v));
         out.push((
             format!("frusta GPU {v}"),
             gpu_gbuffer(&pass, &case).1.unwrap().unwrap(),
