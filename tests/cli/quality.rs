@@ -161,6 +161,29 @@ fn bench_prints_the_table_and_its_json() {
         assert_eq!(t["shadow_ms"].as_array().unwrap().len(), 2);
         assert!(t["shadow_ms_median"].as_f64().unwrap() > 0.0);
     }
+    // The whole frame: every pass timed; each run's wall time covers that run's shadow pass
+    // (the MFT tracer's runs are the frame's runs); the refined frame refined some pixels of
+    // the playground's penumbrae.
+    let frame = &report["cases"][0]["frame"];
+    let ms = |k: &str| frame[k].as_f64().unwrap_or_else(|| panic!("no frame.{k}"));
+    let passes = [
+        "primary_ms_median",
+        "shadow_ms_median",
+        "shade_ms_median",
+        "filter_ms_median",
+    ];
+    assert!(passes.iter().all(|&k| ms(k) > 0.0), "{frame}");
+    let walls = frame["wall_ms"].as_array().unwrap();
+    let shadows = tracers[0]["shadow_ms"].as_array().unwrap();
+    assert_eq!(walls.len(), shadows.len());
+    for (wall, shadow) in walls.iter().zip(shadows) {
+        assert!(wall.as_f64().unwrap() >= shadow.as_f64().unwrap(), "{frame}");
+    }
+    assert!(
+        ms("refine_ms_median") > 0.0 && frame["refined_pixels"].as_u64().unwrap() > 0,
+        "{frame}"
+    );
+    assert!(stdout.contains("frame (mft, filtered)") && stdout.contains("refined frame"));
     let mft = &tracers[0]["counters"];
     assert!(mft["box_tests"].as_u64().unwrap() > 0 && mft["triangle_tests"].as_u64().unwrap() > 0);
     assert!(

@@ -163,6 +163,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             let mut primary = Vec::new();
             // The MFT renderer's frames (the first renderer): every pass, and the wall time.
             let (mut shade, mut filter, mut wall) = (Vec::new(), Vec::new(), Vec::new());
+            let (mut refine, mut refined_wall, mut refined_pixels) = (Vec::new(), Vec::new(), 0);
             let mut rays = 0;
             for (tracer, renderer, counting) in &renderers {
                 step += 1;
@@ -194,6 +195,23 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                         }
                     }
                     rays = frame.masks.iter().filter(|&&m| m & MASK_SKY == 0).count() as u64 * 16;
+                }
+                if tracer_results.is_empty() {
+                    let refined_settings = FrameSettings {
+                        refine: true,
+                        ..frame_settings
+                    };
+                    for run in 0..=args.runs {
+                        progress!("\r{label}: refined frame, run {run}/{} {:30}", args.runs, "");
+                        let start = std::time::Instant::now();
+                        let frame = renderer.render(&ctx, &gpu_scene, &case.view, &refined_settings)?;
+                        let wall_ms = start.elapsed().as_secs_f64() * 1e3;
+                        if run > 0 {
+                            refine.push(frame.pass_ms("refine"));
+                            refined_wall.push(wall_ms);
+                        }
+                        refined_pixels = frame.refined.iter().filter(|&&r| r).count();
+                    }
                 }
                 let counters = match counting {
                     Some(r) => {
@@ -276,6 +294,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     wall_ms_min: wall.iter().copied().fold(f64::INFINITY, f64::min),
                     wall_ms_median: median(&wall),
                     wall_ms: wall,
+                    refine_ms_median: median(&refine),
+                    refined_wall_ms_median: median(&refined_wall),
+                    refined_pixels,
                 },
                 primary: primary_results,
                 tracers: tracer_results,

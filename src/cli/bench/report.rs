@@ -28,6 +28,11 @@ pub(super) struct FrameResult {
     pub(super) wall_ms: Vec<f64>,
     pub(super) wall_ms_min: f64,
     pub(super) wall_ms_median: f64,
+    /// The same frame with `--refine`: the refinement's GPU ms (its select, gather,
+    /// shadow and resolve dispatches), the frame's wall ms, and the pixels refined.
+    pub(super) refine_ms_median: f64,
+    pub(super) refined_wall_ms_median: f64,
+    pub(super) refined_pixels: usize,
 }
 
 /// One primary tracer's figures in one case.
@@ -177,6 +182,10 @@ pub(super) fn print_case(r: &CaseResult) {
         f.filter_ms_median,
         f.wall_ms_min,
         f.wall_ms_median
+    );
+    println!(
+        "  refined frame (--refine): refinement {:.1} ms GPU at {} px; wall {:.1} ms median",
+        f.refine_ms_median, f.refined_pixels, f.refined_wall_ms_median
     );
     println!(
         "  {:<8} {:>10} {:>10} {:>8} {:>9} {:>11} {:>11} {:>11} {:>11}",
