@@ -51,6 +51,8 @@
 pub mod assets;
 pub mod bvh;
 pub mod contract;
+#[cfg(feature = "embree")]
+pub mod embree;
 mod error;
 pub mod gpu;
 pub mod output;

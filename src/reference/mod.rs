@@ -11,7 +11,7 @@ pub mod exact;
 pub mod filter;
 pub mod gbuffer_from_surface;
 mod intersect;
-mod parallel;
+pub(crate) mod parallel;
 mod polygon;
 pub mod primary;
 pub mod primary_mft;

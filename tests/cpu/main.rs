@@ -5,6 +5,8 @@ mod support;
 
 mod assets;
 mod bvh;
+#[cfg(feature = "embree")]
+mod embree;
 mod exact_visibility;
 mod metrics;
 mod refit;

@@ -49,9 +49,11 @@ pub struct BenchArgs {
     /// Shadow rays per pixel (the tracers compared here trace 16).
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(16..=16))]
     spp: u32,
-    /// Tracers to time, comma-separated; MFT is always included (speedups are over it).
+    /// Tracers to time, comma-separated: mft, packet, per-ray, and embree (Embree 3's
+    /// `rtcOccluded16` on all CPU cores, the same rays and masks; needs a penumbra built with
+    /// `--features embree`). MFT is always included (speedups are over it).
     #[arg(long, value_delimiter = ',', default_value = "mft,packet,per-ray", value_parser = parse_tracer)]
-    tracers: Vec<Tracer>,
+    tracers: Vec<BenchTracer>,
     /// Timed runs per tracer (after one warm-up run).
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
     runs: u32,
@@ -83,10 +85,26 @@ pub struct BenchArgs {
     bvh: BvhArgs,
 }
 
-fn parse_tracer(s: &str) -> std::result::Result<Tracer, String> {
+/// A tracer `bench` times: one of the GPU shadow tracers, or the Embree peer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BenchTracer {
+    /// A GPU shadow tracer.
+    Gpu(Tracer),
+    /// Embree 3 on the CPU ([`penumbra::embree`]).
+    Embree,
+}
+
+fn parse_tracer(s: &str) -> std::result::Result<BenchTracer, String> {
+    if s == "embree" {
+        return if cfg!(feature = "embree") {
+            Ok(BenchTracer::Embree)
+        } else {
+            Err("this penumbra was built without Embree (cargo build --release --features embree)".into())
+        };
+    }
     match s.parse()? {
-        Tracer::Reference { .. } => Err("bench compares 16-ray tracers: mft, packet, per-ray".into()),
-        t => Ok(t),
+        Tracer::Reference { .. } => Err("bench compares 16-ray tracers: mft, packet, per-ray, embree".into()),
+        t => Ok(BenchTracer::Gpu(t)),
     }
 }
 
@@ -97,12 +115,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if args.without_cr {
         tracers.push((Tracer::Mft, false));
     }
-    tracers.extend(
-        args.tracers
-            .iter()
-            .filter(|&&t| t != Tracer::Mft)
-            .map(|&t| (t, false)),
-    );
+    tracers.extend(args.tracers.iter().filter_map(|&t| match t {
+        BenchTracer::Gpu(t) if t != Tracer::Mft => Some((t, false)),
+        _ => None,
+    }));
+    let embree = args.tracers.contains(&BenchTracer::Embree);
     for &leaf in &args.leaf_sizes {
         if !(1..=255).contains(&leaf) {
             return Err(Error::value(
@@ -235,6 +252,14 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     counters,
                 });
             }
+            let embree_build_ms = if embree {
+                let (result, build_ms) =
+                    bench_embree(&ctx, args, &renderers[0].1, &gpu_scene, &bvh, case, rays)?;
+                tracer_results.push(result);
+                Some(build_ms)
+            } else {
+                None
+            };
             progress!("\r{:100}\r", "");
             let mft_median = tracer_results[0].shadow_ms_median;
             for t in &mut tracer_results {
@@ -300,6 +325,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 },
                 primary: primary_results,
                 tracers: tracer_results,
+                embree_build_ms,
                 animation,
                 reductions_vs_packet,
             };
@@ -319,6 +345,84 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         println!("wrote     {}", path.display());
     }
     Ok(())
+}
+
+/// Times Embree's occlusion queries for the frame's own G-buffer (from one MFT frame) and
+/// light samples: wall ms per run of [`penumbra::embree::EmbreeScene::masks`], after a
+/// warm-up; returns its row and Embree's BVH build ms (reported apart). The masks must be
+/// the MFT frame's up to the rays the oracle comparison excuses; a count is printed.
+#[cfg(feature = "embree")]
+fn bench_embree(
+    ctx: &GpuContext,
+    args: &BenchArgs,
+    mft: &Renderer,
+    gpu_scene: &GpuScene,
+    bvh: &Bvh,
+    case: &cases::Case,
+    rays: u64,
+) -> Result<(TracerResult, f64)> {
+    use penumbra::reference::shadow_per_ray::shadow_params;
+    let (w, h) = args.size;
+    let settings = FrameSettings {
+        keep_gbuffer: true,
+        ..FrameSettings::new(w, h)
+    };
+    let frame = mft.render(ctx, gpu_scene, &case.view, &settings)?;
+    let mut gbuffer = frame.gbuffer.clone().unwrap_or_default();
+    // The G-buffer is relative to the GPU scene's origin; Embree traces the world's BVH.
+    for t in &mut gbuffer {
+        t.origin += gpu_scene.origin;
+    }
+    let embree = penumbra::embree::EmbreeScene::new(bvh)?;
+    let points = penumbra::sampling::light_points(&case.view.light);
+    let params = shadow_params(&case.view.light, w, h);
+    let mut times = Vec::new();
+    let mut masks = Vec::new();
+    for run in 0..=args.runs {
+        progress!("\r{} embree: run {run}/{} {:30}", case.name, args.runs, "");
+        let start = std::time::Instant::now();
+        masks = embree.masks(&gbuffer, &points, &params);
+        if run > 0 {
+            times.push(start.elapsed().as_secs_f64() * 1e3);
+        }
+    }
+    let differing: u32 = masks
+        .iter()
+        .zip(&frame.masks)
+        .map(|(a, b)| ((a ^ b) & 0xffff).count_ones())
+        .sum();
+    progress!("\r{:100}\r", "");
+    println!(
+        "  embree: BVH build {:.1} ms (not in its times); its masks differ from MFT's in {differing} of {rays} rays",
+        embree.build_ms
+    );
+    let med = median(&times);
+    Ok((
+        TracerResult {
+            tracer: "embree".to_owned(),
+            shadow_ms_min: times.iter().copied().fold(f64::INFINITY, f64::min),
+            shadow_ms_median: med,
+            mrays_per_s: rays as f64 / (med * 1e3),
+            shadow_ms: times,
+            mft_speedup: f64::NAN,
+            counters: None,
+        },
+        embree.build_ms,
+    ))
+}
+
+/// Without the `embree` feature `--tracers embree` is refused when parsed.
+#[cfg(not(feature = "embree"))]
+fn bench_embree(
+    _: &GpuContext,
+    _: &BenchArgs,
+    _: &Renderer,
+    _: &GpuScene,
+    _: &Bvh,
+    _: &cases::Case,
+    _: u64,
+) -> Result<(TracerResult, f64)> {
+    unreachable!("parse_tracer refuses embree without the feature")
 }
 
 /// Times the camera-ray pass alone with each primary tracer, then counts its work.

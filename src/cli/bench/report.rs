@@ -115,6 +115,8 @@ pub(super) struct CaseResult {
     pub(super) frame: FrameResult,
     pub(super) primary: Vec<PrimaryResult>,
     pub(super) tracers: Vec<TracerResult>,
+    /// Embree's BVH build ms when it was benched (its times leave it out).
+    pub(super) embree_build_ms: Option<f64>,
     /// The moving-object case, when the scene has an object to move.
     pub(super) animation: Option<AnimationResult>,
     /// Counter reductions of MFT against the packet tracer (packet / MFT).
