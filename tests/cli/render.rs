@@ -81,6 +81,34 @@ fn render_on_lavapipe_runs_the_subgroup_vector_without_any_setting() {
     }
 }
 
+/// A width the user set is kept: at `LP_NATIVE_VECTOR_WIDTH=256` lavapipe has 8-wide
+/// subgroups and `render` runs the workgroup vector.
+#[test]
+fn render_keeps_the_users_lavapipe_vector_width() {
+    let dir = out_dir("user-vector");
+    let out = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .args(["render", "--size", "32x32"])
+        .env(penumbra::gpu::LAVAPIPE_VECTOR_WIDTH_ENV, "256")
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let adapter = stdout.lines().find(|l| l.starts_with("adapter")).unwrap();
+    if adapter.contains("llvmpipe") {
+        assert!(
+            stdout.contains("vector workgroup") && adapter.contains("subgroups 8..8"),
+            "LP_NATIVE_VECTOR_WIDTH=256 should give 8-wide subgroups:\n{stdout}"
+        );
+    } else {
+        eprintln!("not lavapipe ({adapter}): the variable does not apply");
+    }
+}
+
 #[test]
 fn generated_scenes_to_png_and_exr_with_visibility_close_to_the_oracle() {
     for s in assets::EMBEDDED_SCENES {
