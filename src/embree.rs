@@ -15,7 +15,7 @@ use std::time::Instant;
 use glam::Vec3;
 
 use crate::bvh::Bvh;
-use crate::contract::layout::{GBufferTexel, MASK_SKY, ShadowParams};
+use crate::contract::layout::{GBufferTexel, MASK_FULL, MASK_SKY, ShadowParams};
 use crate::reference::shadow_per_ray::initial_mask;
 use crate::sampling::{SAMPLES_PER_SET, pixel_set};
 use crate::{Error, Result};
@@ -182,7 +182,7 @@ impl EmbreeScene {
         params: &ShadowParams,
     ) -> u32 {
         let mut mask = initial_mask(texel, set, light_points, params);
-        if mask & MASK_SKY != 0 || mask & 0xffff == 0xffff {
+        if mask & MASK_SKY != 0 || mask & MASK_FULL == MASK_FULL {
             return mask;
         }
         let o = texel.origin;

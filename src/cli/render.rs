@@ -172,15 +172,22 @@ pub enum TracerArg {
     Gpu(Tracer),
     /// Exact visibility by beam splitting, on the CPU.
     Exact,
+    /// Embree 3's `rtcOccluded16` on all CPU cores, the same rays and masks as `packet`
+    /// (needs a penumbra built with `--features embree`).
+    Embree,
 }
 
 fn parse_tracer(s: &str) -> std::result::Result<TracerArg, String> {
     match s {
         "exact" => Ok(TracerArg::Exact),
+        "embree" if cfg!(feature = "embree") => Ok(TracerArg::Embree),
+        "embree" => {
+            Err("this penumbra was built without Embree (cargo build --release --features embree)".into())
+        }
         _ => s
             .parse()
             .map(TracerArg::Gpu)
-            .map_err(|e| format!("{e}, or exact")),
+            .map_err(|e| format!("{e}, exact or embree")),
     }
 }
 
@@ -206,9 +213,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             "only the mft, packet and per-ray tracers are refined (exact and reference are not filtered)",
         ));
     }
+    let embree = args.tracer == TracerArg::Embree;
     let tracer = match args.tracer {
         TracerArg::Gpu(tracer) => tracer,
         TracerArg::Exact => return super::exact::run(args),
+        // The frame's stages and light samples are MFT's; Embree replaces its shadow pass.
+        TracerArg::Embree => Tracer::Mft,
     };
     let tracer = match (tracer, args.spp) {
         (Tracer::Reference { .. }, Some(rays)) if (1..=65_535).contains(&rays) => Tracer::Reference { rays },
@@ -276,7 +286,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             ..RendererOptions::default()
         },
     )?;
-    if tracer.uses_vector() {
+    if embree {
+        println!("tracer    embree (CPU: rtcOccluded16, one 16-ray packet per pixel, all cores)");
+    } else if tracer.uses_vector() {
         println!(
             "tracer    {tracer}, vector {} ({} leaves)",
             renderer.variant(),
@@ -300,23 +312,30 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let unit = tracer.unit();
     let rays_per_pixel = f64::from(tracer.rays_per_pixel());
     let start = Instant::now();
-    let frame =
-        renderer.render_with_progress(&ctx, &gpu_scene, &view, &settings, &mut |phase, done, total| {
-            let name = match phase {
-                Phase::Shadow => "shadow",
-                Phase::Refine => "refine",
-            };
-            progress!(
-                "\r{name}    {done}/{total} {}   ",
-                if unit == 4 { "tiles of 4x4" } else { "pixels" }
-            );
-        })?;
+    let mut report = |phase, done, total| {
+        let name = match phase {
+            Phase::Shadow => "shadow",
+            Phase::Refine => "refine",
+        };
+        progress!(
+            "\r{name}    {done}/{total} {}   ",
+            if unit == 4 { "tiles of 4x4" } else { "pixels" }
+        );
+    };
+    let frame = if embree {
+        embree_frame(&ctx, &renderer, &gpu_scene, &bvh, &view, &settings, &mut report)?
+    } else {
+        renderer.render_with_progress(&ctx, &gpu_scene, &view, &settings, &mut report)?
+    };
     progress!("\r{:60}\r", "");
     let wall = start.elapsed().as_secs_f64();
 
     let hits = frame.masks.iter().filter(|&&m| m & MASK_SKY == 0).count() as f64;
     for pass in ["primary", "shadow", "shade", "filter"] {
-        println!("{pass:<9} {}", gpu_ms(frame.timed_ms(pass)));
+        match frame.timed_ms("shadow-cpu").filter(|_| pass == "shadow") {
+            Some(ms) => println!("{pass:<9} {ms:>9.2} ms CPU (Embree)"),
+            None => println!("{pass:<9} {}", gpu_ms(frame.timed_ms(pass))),
+        }
     }
     if args.refine {
         let refined = frame.refined.iter().filter(|&&r| r).count();
@@ -326,7 +345,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             100.0 * refined as f64 / hits.max(1.0)
         );
     }
-    let rate = match frame.timed_ms("shadow") {
+    let rate = match frame.timed_ms("shadow-cpu").or(frame.timed_ms("shadow")) {
         Some(ms) if ms > 0.0 => format!("{:.2}", hits * rays_per_pixel / (ms * 1e3)),
         _ => "n/a".to_owned(),
     };
@@ -380,6 +399,51 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 
 /// A pass's GPU time for the report: milliseconds, or `n/a` where the adapter has no
 /// timestamp queries (a 0 would read as a measurement).
+/// The frame with Embree's masks (`--tracer embree`): Embree's BVH is built from the same
+/// triangles; the G-buffer the renderer hands over is relative to the GPU scene's origin.
+#[cfg(feature = "embree")]
+fn embree_frame(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    gpu_scene: &GpuScene,
+    bvh: &Bvh,
+    view: &penumbra::scene::view::View,
+    settings: &FrameSettings,
+    report: &mut dyn FnMut(Phase, u64, u64),
+) -> Result<penumbra::gpu::Frame> {
+    use penumbra::contract::layout::GBufferTexel;
+    let scene = penumbra::embree::EmbreeScene::new(bvh)?;
+    println!("embree    BVH built in {:.1} ms", scene.build_ms);
+    let (light, origin) = (view.light, gpu_scene.origin);
+    let points = penumbra::sampling::light_points(&light);
+    let shadows = |texels: &[GBufferTexel], w: u32, h: u32| {
+        let world: Vec<GBufferTexel> = texels
+            .iter()
+            .map(|t| GBufferTexel {
+                origin: t.origin + origin,
+                ..*t
+            })
+            .collect();
+        let params = penumbra::reference::shadow_per_ray::shadow_params(&light, w, h);
+        scene.masks(&world, &points, &params)
+    };
+    renderer.render_with_cpu_shadows(ctx, gpu_scene, view, settings, &shadows, report)
+}
+
+/// Without the `embree` feature `--tracer embree` is refused when parsed.
+#[cfg(not(feature = "embree"))]
+fn embree_frame(
+    _: &GpuContext,
+    _: &Renderer,
+    _: &GpuScene,
+    _: &Bvh,
+    _: &penumbra::scene::view::View,
+    _: &FrameSettings,
+    _: &mut dyn FnMut(Phase, u64, u64),
+) -> Result<penumbra::gpu::Frame> {
+    unreachable!("parse_tracer refuses embree without the feature")
+}
+
 fn gpu_ms(ms: Option<f64>) -> String {
     match ms {
         Some(ms) => format!("{ms:>9.2} ms GPU"),

@@ -40,7 +40,7 @@ pub use frame::Frame;
 pub use motion::{MotionSettings, MotionUpdate};
 pub use pixel_buffers::{PIXEL_BUFFERS, PixelBuffer, PixelBuffers};
 pub use primary_pass::{PrimaryOptions, PrimaryPass, PrimaryStatus, PrimaryTracer};
-pub use render::Renderer;
+pub use render::{CpuShadows, Renderer};
 pub use render_settings::{FrameSettings, Phase, RendererOptions};
 pub use scene_buffers::{GpuScene, validate_for_gpu};
 pub use shadow_options::{DEFAULT_REFERENCE_RAYS, LeafMode, Tracer, TracerOptions};

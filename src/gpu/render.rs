@@ -11,7 +11,7 @@ use super::shadow_stages::{ShadowStages, VisibilityStage};
 use super::tiling::{TileRegion, tile_regions, tile_side};
 use super::{
     Frame, FrameSettings, GpuContext, GpuScene, GpuTimer, LeafMode, Phase, RendererOptions, ShadowImage,
-    Tracer, TracerOptions, VectorVariant, read_buffer,
+    ShadowStats, Tracer, TracerOptions, VectorVariant, read_buffer,
 };
 use crate::contract::ITERATION_BUDGET;
 use crate::contract::filter::FilterParams;
@@ -35,6 +35,10 @@ pub struct Renderer {
     primary_fallback: Option<PrimaryPass>,
     stages: ShadowStages,
 }
+
+/// A shadow tracer on the CPU for [`Renderer::render_with_cpu_shadows`]: the masks of a
+/// `width`×`height` G-buffer.
+pub type CpuShadows<'a> = dyn Fn(&[GBufferTexel], u32, u32) -> Vec<u32> + 'a;
 
 impl Renderer {
     /// Builds every pipeline; `options` (or just an `Option<VectorVariant>`) choose the
@@ -126,6 +130,37 @@ impl Renderer {
         settings: &FrameSettings,
         progress: &mut dyn FnMut(Phase, u64, u64),
     ) -> Result<Frame> {
+        self.render_frame(ctx, scene, view, settings, None, progress)
+    }
+
+    /// [`Renderer::render_with_progress`] with the shadow masks made on the CPU by
+    /// `shadows(gbuffer, width, height)` instead of by the GPU tracer: it gets each frame's
+    /// (or tile's) G-buffer, row-major, positions relative to [`GpuScene::origin`], and
+    /// returns its masks (bit j = ray j of the pixel's interleaved set blocked,
+    /// [`crate::contract::layout::MASK_SKY`] for no geometry). Shading, the filter and the
+    /// refinement (which traces its extra samples with this renderer's GPU tracer) follow
+    /// as usual. Its time is in [`Frame::timings`] as `shadow-cpu` (wall ms).
+    pub fn render_with_cpu_shadows(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        view: &View,
+        settings: &FrameSettings,
+        shadows: &CpuShadows<'_>,
+        progress: &mut dyn FnMut(Phase, u64, u64),
+    ) -> Result<Frame> {
+        self.render_frame(ctx, scene, view, settings, Some(shadows), progress)
+    }
+
+    fn render_frame(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        view: &View,
+        settings: &FrameSettings,
+        cpu_shadows: Option<&CpuShadows<'_>>,
+        progress: &mut dyn FnMut(Phase, u64, u64),
+    ) -> Result<Frame> {
         let (w, h) = (settings.width, settings.height);
         if w == 0 || h == 0 {
             return Err(Error::value(
@@ -168,7 +203,7 @@ impl Renderer {
             .max_tile
             .unwrap_or_else(|| tile_side(ctx.info.max_storage_buffer_binding_size));
         if w <= side && h <= side {
-            return self.render_tile(ctx, scene, view, settings, &whole, progress);
+            return self.render_tile(ctx, scene, view, settings, &whole, cpu_shadows, progress);
         }
         let regions = tile_regions(w, h, side);
         let unit = self.tracer().unit();
@@ -183,18 +218,18 @@ impl Renderer {
                 ..*settings
             };
             let camera = tile_camera(&whole, r.x, r.y, r.w, r.h);
-            let tile =
-                self.render_tile(
-                    ctx,
-                    scene,
-                    view,
-                    &tile_settings,
-                    &camera,
-                    &mut |phase, d, t| match phase {
-                        Phase::Shadow => progress(phase, done + d, total),
-                        Phase::Refine => progress(phase, d, t),
-                    },
-                )?;
+            let tile = self.render_tile(
+                ctx,
+                scene,
+                view,
+                &tile_settings,
+                &camera,
+                cpu_shadows,
+                &mut |phase, d, t| match phase {
+                    Phase::Shadow => progress(phase, done + d, total),
+                    Phase::Refine => progress(phase, d, t),
+                },
+            )?;
             done += units(r);
             let frame = out.get_or_insert_with(|| Frame::empty(w, h, settings.keep_gbuffer));
             frame.paste(&tile, r);
@@ -203,6 +238,7 @@ impl Renderer {
     }
 
     /// One frame (or tile) of the image `camera` projects, `settings`-sized.
+    #[allow(clippy::too_many_arguments)]
     fn render_tile(
         &self,
         ctx: &GpuContext,
@@ -210,6 +246,7 @@ impl Renderer {
         view: &View,
         settings: &FrameSettings,
         camera: &CameraParams,
+        cpu_shadows: Option<&CpuShadows<'_>>,
         progress: &mut dyn FnMut(Phase, u64, u64),
     ) -> Result<Frame> {
         let (w, h) = (settings.width, settings.height);
@@ -264,15 +301,37 @@ impl Renderer {
             light_points: &light_points,
             masks: &pixels.masks,
         };
-        let shadow_stats = self.stages.tracer.run(
-            ctx,
-            scene,
-            &image,
-            &shadow,
-            Some(&mut timer),
-            "shadow",
-            &mut |done, total| progress(Phase::Shadow, done, total),
-        )?;
+        let mut cpu_ms = None;
+        let shadow_stats = match cpu_shadows {
+            None => self.stages.tracer.run(
+                ctx,
+                scene,
+                &image,
+                &shadow,
+                Some(&mut timer),
+                "shadow",
+                &mut |done, total| progress(Phase::Shadow, done, total),
+            )?,
+            Some(shadows) => {
+                let texels: Vec<GBufferTexel> = read_buffer(
+                    ctx,
+                    &pixels.gbuffer,
+                    0..pixel_count * size_of::<GBufferTexel>() as u64,
+                )?;
+                let start = std::time::Instant::now();
+                let masks = shadows(&texels, w, h);
+                cpu_ms = Some(start.elapsed().as_secs_f64() * 1e3);
+                if masks.len() != texels.len() {
+                    return Err(Error::invalid(
+                        "Renderer::render_with_cpu_shadows",
+                        format!("{} masks for {} pixels", masks.len(), texels.len()),
+                    ));
+                }
+                ctx.queue
+                    .write_buffer(&pixels.masks, 0, bytemuck::cast_slice(&masks));
+                ShadowStats::default()
+            }
+        };
 
         let filter = settings.filter.map(|(depth_tolerance, normal_tolerance)| {
             FilterParams::with_tolerances(w, h, depth_tolerance, normal_tolerance)
@@ -339,7 +398,11 @@ impl Renderer {
             filtered,
             refined,
             gbuffer,
-            timings: timer.read(ctx)?,
+            timings: {
+                let mut t = timer.read(ctx)?;
+                t.extend(cpu_ms.map(|ms| ("shadow-cpu".to_owned(), ms)));
+                t
+            },
             shadow_stats,
             primary_counters,
             primary_fallback_pixels,

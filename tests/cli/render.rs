@@ -359,3 +359,45 @@ fn an_interrupted_render_leaves_the_old_image_or_the_whole_new_one() {
         "no kill landed before the end of the render: {outcomes:?}"
     );
 }
+
+/// `render --tracer embree` (built with the `embree` feature): Embree's masks go through the
+/// same shade and filter, so the unfiltered visibility matches MFT's wherever their rays
+/// agree — all but 0.1 % of the pixels with geometry on the generated scenes (the oracle
+/// comparison's bound; both match the per-ray oracle there).
+#[cfg(feature = "embree")]
+#[test]
+fn render_with_embree_matches_mft() {
+    for s in assets::EMBEDDED_SCENES {
+        let dir = out_dir(&format!("embree-{}", s.name));
+        for (tracer, file) in [("embree", "e.exr"), ("mft", "m.exr")] {
+            let stdout = penumbra(
+                &dir,
+                &[
+                    "render",
+                    s.name,
+                    "--size",
+                    "96x96",
+                    "--tracer",
+                    tracer,
+                    "-o",
+                    file,
+                    "--aov",
+                    "visibility",
+                ],
+            );
+            if tracer == "embree" {
+                assert!(stdout.contains("ms CPU (Embree)"), "{stdout}");
+            }
+        }
+        let e = read_float_image(&dir.join("e.visibility.exr")).unwrap();
+        let m = read_float_image(&dir.join("m.visibility.exr")).unwrap();
+        let differing = e.pixels.iter().zip(&m.pixels).filter(|(a, b)| a != b).count();
+        assert!(
+            differing * 1000 <= e.pixels.len(),
+            "{}: {differing} pixels differ",
+            s.name
+        );
+        let shadowed = e.pixels.iter().filter(|&&v| v < 1.0).count();
+        assert!(shadowed > 0, "{}: no shadow at all", s.name);
+    }
+}
