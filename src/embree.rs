@@ -18,6 +18,7 @@ use crate::bvh::Bvh;
 use crate::contract::layout::{GBufferTexel, MASK_FULL, MASK_SKY, ShadowParams};
 use crate::reference::shadow_per_ray::initial_mask;
 use crate::sampling::{SAMPLES_PER_SET, pixel_set};
+use crate::scene::view::QuadLight;
 use crate::{Error, Result};
 
 type RtcDevice = *mut c_void;
@@ -231,6 +232,35 @@ impl EmbreeScene {
         crate::reference::parallel::per_texel(gbuffer, params, |x, y, texel| {
             self.pixel_mask(texel, pixel_set(x, y), light_points, params)
         })
+    }
+}
+
+impl EmbreeScene {
+    /// The masks of a renderer's G-buffer for [`crate::gpu::Renderer::render_with_cpu_shadows`]:
+    /// `gbuffer` is `width`×`height` and relative to `origin` ([`crate::gpu::GpuScene::origin`]),
+    /// `light` in world space, as this scene's BVH is.
+    pub fn frame_masks(
+        &self,
+        light: &QuadLight,
+        origin: Vec3,
+        gbuffer: &[GBufferTexel],
+        width: u32,
+        height: u32,
+    ) -> Vec<u32> {
+        // A scene near the world's origin is not moved (GpuScene::origin is zero): no copy.
+        let world: std::borrow::Cow<[GBufferTexel]> = if origin == Vec3::ZERO {
+            gbuffer.into()
+        } else {
+            gbuffer
+                .iter()
+                .map(|t| GBufferTexel {
+                    origin: t.origin + origin,
+                    ..*t
+                })
+                .collect()
+        };
+        let params = crate::contract::shadow::shadow_params(light, width, height);
+        self.masks(&world, &crate::sampling::light_points(light), &params)
     }
 }
 

@@ -411,22 +411,9 @@ fn embree_frame(
     settings: &FrameSettings,
     report: &mut dyn FnMut(Phase, u64, u64),
 ) -> Result<penumbra::gpu::Frame> {
-    use penumbra::contract::layout::GBufferTexel;
     let scene = penumbra::embree::EmbreeScene::new(bvh)?;
     println!("embree    BVH built in {:.1} ms", scene.build_ms);
-    let (light, origin) = (view.light, gpu_scene.origin);
-    let points = penumbra::sampling::light_points(&light);
-    let shadows = |texels: &[GBufferTexel], w: u32, h: u32| {
-        let world: Vec<GBufferTexel> = texels
-            .iter()
-            .map(|t| GBufferTexel {
-                origin: t.origin + origin,
-                ..*t
-            })
-            .collect();
-        let params = penumbra::reference::shadow_per_ray::shadow_params(&light, w, h);
-        scene.masks(&world, &points, &params)
-    };
+    let shadows = |texels: &[_], w, h| scene.frame_masks(&view.light, gpu_scene.origin, texels, w, h);
     renderer.render_with_cpu_shadows(ctx, gpu_scene, view, settings, &shadows, report)
 }
 

@@ -157,9 +157,13 @@ impl GpuContext {
         // GL backend probes for a Wayland display, and on a headless machine libwayland
         // prints "error: XDG_RUNTIME_DIR is invalid or not set" twice, although the
         // renderer never presents.
-        let mut instance = new_instance(wgpu::Backends::VULKAN);
-        let mut adapters = enumerate(&instance, wgpu::Backends::VULKAN);
-        if adapters.is_empty() || wanted.is_some() {
+        let first = match wanted {
+            Some(_) => wgpu::Backends::all(),
+            None => wgpu::Backends::VULKAN,
+        };
+        let mut instance = new_instance(first);
+        let mut adapters = enumerate(&instance, first);
+        if adapters.is_empty() && first != wgpu::Backends::all() {
             instance = new_instance(wgpu::Backends::all());
             adapters = enumerate(&instance, wgpu::Backends::all());
         }

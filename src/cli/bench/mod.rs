@@ -301,6 +301,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 }
                 None => None,
             };
+            let primary_ms = median(&primary);
             let result = CaseResult {
                 scene: case.name.clone(),
                 view: case.view_name.clone(),
@@ -310,9 +311,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 width: w,
                 height: h,
                 shadow_rays: rays,
-                primary_ms_median: median(&primary),
+                primary_ms_median: primary_ms,
                 frame: FrameResult {
-                    primary_ms_median: median(&primary),
+                    primary_ms_median: primary_ms,
                     shadow_ms_median: tracer_results[0].shadow_ms_median,
                     shade_ms_median: median(&shade),
                     filter_ms_median: median(&filter),
@@ -361,27 +362,20 @@ fn bench_embree(
     case: &cases::Case,
     rays: u64,
 ) -> Result<(TracerResult, f64)> {
-    use penumbra::reference::shadow_per_ray::shadow_params;
     let (w, h) = args.size;
     let settings = FrameSettings {
         keep_gbuffer: true,
         ..FrameSettings::new(w, h)
     };
     let frame = mft.render(ctx, gpu_scene, &case.view, &settings)?;
-    let mut gbuffer = frame.gbuffer.clone().unwrap_or_default();
-    // The G-buffer is relative to the GPU scene's origin; Embree traces the world's BVH.
-    for t in &mut gbuffer {
-        t.origin += gpu_scene.origin;
-    }
+    let gbuffer = frame.gbuffer.clone().unwrap_or_default();
     let embree = penumbra::embree::EmbreeScene::new(bvh)?;
-    let points = penumbra::sampling::light_points(&case.view.light);
-    let params = shadow_params(&case.view.light, w, h);
     let mut times = Vec::new();
     let mut masks = Vec::new();
     for run in 0..=args.runs {
         progress!("\r{} embree: run {run}/{} {:30}", case.name, args.runs, "");
         let start = std::time::Instant::now();
-        masks = embree.masks(&gbuffer, &points, &params);
+        masks = embree.frame_masks(&case.view.light, gpu_scene.origin, &gbuffer, w, h);
         if run > 0 {
             times.push(start.elapsed().as_secs_f64() * 1e3);
         }
