@@ -7,12 +7,7 @@
 #import shared/groups
 #import shared/intersect
 #import shared/layout
-
-// 16: the pixel's ray j goes to point j of its interleaved set (x mod 4 + 4 (y mod 4)),
-// and bit j of its mask is set when it is blocked. Otherwise ("reference"): ray j goes
-// to point j of one set of RAYS_PER_PIXEL points shared by every pixel, and the
-// pixel's word counts its blocked rays (below MASK_SKY: at most 65,535 rays).
-override RAYS_PER_PIXEL: u32 = 16u;
+#import shared/pixel_rays
 
 @group(0) @binding(0) var<uniform> params: ShadowParams;
 @group(0) @binding(1) var<storage, read> nodes: array<BvhNode>;
@@ -89,30 +84,13 @@ fn occluded(origin: vec3<f32>, dir: vec3<f32>) -> i32 {
 
 @compute @workgroup_size(LINE_GROUP)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let index = gid.x + gid.y * groups.x * LINE_GROUP;
-    let slot = index / RAYS_PER_PIXEL;
-    let j = index % RAYS_PER_PIXEL;
-    if slot >= params.tiles_x * params.tiles_y {
+    let ray = start_pixel_ray(gid.x + gid.y * groups.x * LINE_GROUP);
+    if !ray.live {
         return;
     }
-    let x = params.tile_origin_x + slot % params.tiles_x;
-    let y = params.tile_origin_y + slot / params.tiles_x;
-    let pixel = y * params.width + x;
-    let texel = gbuffer[pixel];
-    if texel.depth <= 0.0 {
-        if j == 0u {
-            atomicOr(&masks[pixel], MASK_SKY);
-        }
-        return;
-    }
-    let interleaved = RAYS_PER_PIXEL == 16u;
-    let point = select(j, ((x & 3u) + 4u * (y & 3u)) * 16u + j, interleaved);
-    let dir = light_points[point].xyz - texel.origin;
-    // Same rules as reference::shadow_per_ray::initial_mask.
-    var blocked = dot(params.light_normal, texel.origin - params.light_corners[0].xyz) <= 0.0
-        || dot(texel.geo_normal, dir) <= 0.0;
+    var blocked = ray.blocked;
     if !blocked {
-        let hit = occluded(texel.origin, dir);
+        let hit = occluded(ray.origin, ray.dir);
         if hit == -1 {
             atomicAdd(&status[WORD_STATUS], 1u);
             return;
@@ -124,10 +102,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         blocked = hit == 1;
     }
     if blocked {
-        if interleaved {
-            atomicOr(&masks[pixel], 1u << j);
-        } else {
-            atomicAdd(&masks[pixel], 1u);
-        }
+        record_blocked(ray);
     }
 }

@@ -90,6 +90,19 @@ pub enum Error {
         /// Each missing feature or too-small limit, e.g. `max_storage_buffers_per_shader_stage 4 (needs 7)`.
         missing: Vec<String>,
     },
+    /// Ray queries were asked for ([`crate::gpu::GpuOptions::ray_query`]) on an adapter
+    /// without them.
+    #[error(
+        "ray queries are missing: adapter `{adapter}`, driver `{driver}`, does not offer wgpu's \
+         EXPERIMENTAL_RAY_QUERY (Vulkan VK_KHR_ray_query; Mesa 25 lavapipe and GPUs with ray \
+         tracing have it, Mesa 22 lavapipe does not); choose another tracer or adapter"
+    )]
+    RayQueryUnsupported {
+        /// The adapter's name.
+        adapter: String,
+        /// Its driver and version.
+        driver: String,
+    },
     /// Something a caller passed in does not fit the call: a texture of the wrong size,
     /// format or usage, an instance index that does not exist.
     #[error("{what}: {message}")]

@@ -46,6 +46,10 @@ pub static SOURCES: &[(&str, &str)] = &[
     ("shadow_mft", include_str!("../shaders/shadow_mft.wgsl")),
     ("shadow_packet", include_str!("../shaders/shadow_packet.wgsl")),
     ("shadow_per_ray", include_str!("../shaders/shadow_per_ray.wgsl")),
+    (
+        "shadow_ray_query",
+        include_str!("../shaders/shadow_ray_query.wgsl"),
+    ),
     ("shared/bvh", include_str!("../shaders/shared/bvh.wgsl")),
     (
         "shared/bvh_vec16",
@@ -63,6 +67,10 @@ pub static SOURCES: &[(&str, &str)] = &[
         include_str!("../shaders/shared/intersect.wgsl"),
     ),
     ("shared/layout", include_str!("../shaders/shared/layout.wgsl")),
+    (
+        "shared/pixel_rays",
+        include_str!("../shaders/shared/pixel_rays.wgsl"),
+    ),
     ("shared/primary", include_str!("../shaders/shared/primary.wgsl")),
     ("shared/refine", include_str!("../shaders/shared/refine.wgsl")),
     ("shared/surface", include_str!("../shaders/shared/surface.wgsl")),
@@ -122,15 +130,19 @@ pub const KERNELS: &[(&str, &[Aliases<'static>])] = &[
         ],
     ),
     ("shadow_per_ray", &[&[]]),
+    ("shadow_ray_query", &[&[]]),
     ("visibility_to_texture", &[&[]]),
     ("visibility_values", &[&[]]),
 ];
 
 /// What [`validate`] allows beyond core WGSL: exactly what [`crate::gpu::GpuContext`] may
-/// enable (subgroup operations), plus naga's defaults that every wgpu backend we use has.
+/// enable (subgroup operations; ray queries, which only the `shadow_ray_query` kernel
+/// uses and only a device with them builds), plus naga's defaults that every wgpu
+/// backend we use has.
 pub const VALIDATION_CAPABILITIES: Capabilities = Capabilities::MULTISAMPLED_SHADING
     .union(Capabilities::CUBE_ARRAY_TEXTURES)
-    .union(Capabilities::SUBGROUP);
+    .union(Capabilities::SUBGROUP)
+    .union(Capabilities::RAY_QUERY);
 
 /// The source of the module `name` (e.g. `"shared/bvh"`), if there is one.
 pub fn source(name: &str) -> Option<&'static str> {

@@ -118,6 +118,7 @@ pub fn run(args: &QualityArgs) -> Result<()> {
     let bvh = Bvh::build(&scene, &args.bvh.settings())?;
     let ctx = GpuContext::new(&GpuOptions {
         adapter: args.adapter.clone(),
+        ..GpuOptions::default()
     })?;
     println!("adapter   {}", ctx.info);
     println!(

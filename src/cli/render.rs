@@ -106,7 +106,8 @@ pub struct RenderArgs {
     /// Image size WIDTHxHEIGHT in pixels (any size; edge tiles are partial).
     #[arg(long, default_value = "512x512", value_parser = super::parse_size)]
     pub size: (u32, u32),
-    /// Shadow tracer: mft (multi-frusta), packet (16-ray packets), per-ray, reference
+    /// Shadow tracer: mft (multi-frusta), packet (16-ray packets), per-ray, ray-query (the
+    /// driver's ray tracing, where the adapter has ray queries), reference
     /// (--spp rays per pixel to the same stratified points, unfiltered), or exact (CPU
     /// beam splitting: the exactly visible fraction of the light; writes the visibility
     /// image as the output).
@@ -115,7 +116,7 @@ pub struct RenderArgs {
     /// Exact tracer: give up (with an error, writing nothing) after this many seconds.
     #[arg(long, default_value_t = 600.0)]
     pub time_budget: f64,
-    /// Shadow rays per pixel: 16 for mft, packet and per-ray (one interleaved set per
+    /// Shadow rays per pixel: 16 for mft, packet, per-ray and ray-query (one interleaved set per
     /// pixel); any number up to 65535 for reference (default 256).
     #[arg(long)]
     pub spp: Option<u32>,
@@ -271,6 +272,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 
     let ctx = GpuContext::new(&GpuOptions {
         adapter: args.adapter.clone(),
+        ray_query: tracer == Tracer::RayQuery,
     })?;
     println!("adapter   {}", ctx.info);
     let forced = args.vector.forced();

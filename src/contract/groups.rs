@@ -5,7 +5,7 @@
 /// the host dispatches `ceil(width / PIXEL_GROUP) × ceil(height / PIXEL_GROUP)` of them.
 pub const PIXEL_GROUP: u32 = 8;
 
-/// Invocations of the one-dimensional workgroups (the per-ray shadow kernel's rays, the
+/// Invocations of the one-dimensional workgroups (the per-ray and ray-query shadow kernels' rays, the
 /// refinement's list slots, the self-test's nodes).
 pub const LINE_GROUP: u32 = 64;
 
@@ -24,6 +24,7 @@ pub const KERNEL_GROUPS: &[(&str, [u32; 3])] = &[
     ("gpu_selftest", [LINE_GROUP, 1, 1]),
     ("refine_resolve", [LINE_GROUP, 1, 1]),
     ("shadow_per_ray", [LINE_GROUP, 1, 1]),
+    ("shadow_ray_query", [LINE_GROUP, 1, 1]),
 ];
 
 #[cfg(test)]

@@ -55,6 +55,10 @@ pub struct GpuOptions {
     /// The adapter to use: an index into the enumerated list or a case-insensitive part of
     /// its name. `None`: the env var [`ADAPTER_ENV`], else the best one found.
     pub adapter: Option<String>,
+    /// Create the device with ray queries ([`wgpu::Features::EXPERIMENTAL_RAY_QUERY`], for
+    /// [`crate::gpu::Tracer::RayQuery`]); [`Error::RayQueryUnsupported`] when the adapter
+    /// has none. Off by default: scenes then build no acceleration structures.
+    pub ray_query: bool,
 }
 
 /// What the chosen adapter is and can do, in one printable line.
@@ -173,12 +177,30 @@ impl GpuContext {
         };
 
         let offered = adapter.features();
-        let required_features = offered & (wgpu::Features::SUBGROUP | wgpu::Features::TIMESTAMP_QUERY);
+        let mut required_features = offered & (wgpu::Features::SUBGROUP | wgpu::Features::TIMESTAMP_QUERY);
+        if opts.ray_query {
+            if !offered.contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY) {
+                let info = adapter.get_info();
+                return Err(Error::RayQueryUnsupported {
+                    adapter: info.name,
+                    driver: format!("{} {}", info.driver, info.driver_info),
+                });
+            }
+            required_features |= wgpu::Features::EXPERIMENTAL_RAY_QUERY;
+        }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("penumbra"),
             required_features,
             // The adapter's own limits, not the WebGPU defaults: scenes need big storage buffers.
             required_limits: adapter.limits(),
+            // SAFETY: the only experimental feature is ray queries, asked for by
+            // `opts.ray_query`; penumbra uses them only as wgpu's ray-tracing spec describes
+            // (BLAS built before the TLAS that holds it, both before the kernel binds it).
+            experimental_features: if opts.ray_query {
+                unsafe { wgpu::ExperimentalFeatures::enabled() }
+            } else {
+                wgpu::ExperimentalFeatures::disabled()
+            },
             ..Default::default()
         }))
         .map_err(|e| Error::Device(e.to_string()))?;

@@ -23,6 +23,8 @@ pub enum Binding {
     FloatTexture,
     /// `texture_storage_2d<FORMAT, write>`.
     StorageTexture(wgpu::TextureFormat),
+    /// `acceleration_structure` (a TLAS, for ray queries).
+    AccelerationStructure,
 }
 
 impl Binding {
@@ -48,6 +50,9 @@ impl Binding {
                 format,
                 view_dimension: wgpu::TextureViewDimension::D2,
             },
+            Binding::AccelerationStructure => {
+                wgpu::BindingType::AccelerationStructure { vertex_return: false }
+            }
         }
     }
 }
@@ -94,6 +99,9 @@ pub fn reflect_bindings(module: &naga::Module) -> std::result::Result<Vec<(Bindi
                 } if access == StorageAccess::STORE => Binding::StorageTexture(wgpu::TextureFormat::R32Float),
                 other => return Err(format!("`{name}`: no bind group layout for a {other:?} texture")),
             },
+            (AddressSpace::Handle, TypeInner::AccelerationStructure { vertex_return: false }) => {
+                Binding::AccelerationStructure
+            }
             (space, inner) => return Err(format!("`{name}`: no bind group layout for {space:?} {inner:?}")),
         };
         found.push((rb.binding, binding, name));

@@ -279,6 +279,11 @@ impl GpuScene {
             );
         }
         update.upload_ms = start.elapsed().as_secs_f64() * 1e3;
+        // The ray-query structures are built again from the new corners and waited for
+        // (their time: `RayQueryScene::build_ms`).
+        if let Some(rq) = &mut self.ray_query {
+            rq.build(queue, &self.triangles)?;
+        }
         let root = bvh.nodes[0];
         self.diagonal = (root.bmax - root.bmin).length();
         Ok(update)

@@ -40,6 +40,10 @@ pub struct GpuScene {
     pub origin: Vec3,
     /// The CPU copy that moving objects need ([`GpuScene::with_motion`]).
     pub(super) motion: Option<Box<super::motion::Motion>>,
+    /// The driver's acceleration structures over `triangles`, for the ray-query tracer:
+    /// built when the device has [`wgpu::Features::EXPERIMENTAL_RAY_QUERY`]
+    /// ([`super::GpuOptions::ray_query`]), else `None`; rebuilt when objects move.
+    pub ray_query: Option<super::RayQueryScene>,
 }
 
 /// Checks what the unchecked kernels index with: every child pair and every
@@ -110,14 +114,31 @@ impl GpuScene {
         validate_for_gpu(bvh)?;
         let usage = wgpu::BufferUsages::COPY_DST;
         let shading = ShadingData::new(scene, bvh)?;
+        let ray_query = ctx
+            .device
+            .features()
+            .contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY);
+        let triangle_usage = if ray_query {
+            usage | wgpu::BufferUsages::BLAS_INPUT
+        } else {
+            usage
+        };
+        let triangles = storage_buffer(
+            ctx,
+            "BVH triangles",
+            &triangles_from(&bvh.triangles, origin),
+            triangle_usage,
+        )?;
+        let ray_query = if ray_query {
+            let count = u32::try_from(bvh.triangles.len())
+                .map_err(|_| Error::Bvh("more than 2^32 triangles".into()))?;
+            Some(super::RayQueryScene::new(ctx, &triangles, count)?)
+        } else {
+            None
+        };
         Ok(GpuScene {
             nodes: storage_buffer(ctx, "BVH nodes", &nodes_from(&bvh.nodes, origin), usage)?,
-            triangles: storage_buffer(
-                ctx,
-                "BVH triangles",
-                &triangles_from(&bvh.triangles, origin),
-                usage,
-            )?,
+            triangles,
             shading: storage_buffer(ctx, "shading triangles", &shading.triangles, usage)?,
             materials: storage_buffer(ctx, "materials", &shading.materials, usage)?,
             textures: storage_buffer(ctx, "textures", &shading.textures, usage)?,
@@ -125,6 +146,7 @@ impl GpuScene {
             diagonal: scene.bounds().diagonal(),
             origin,
             motion: None,
+            ray_query,
         })
     }
 }

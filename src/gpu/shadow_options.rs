@@ -24,6 +24,10 @@ pub enum Tracer {
     /// The usual GPU compute tracer: every invocation traces one ray alone
     /// (`shaders/shadow_per_ray.wgsl`).
     PerRay,
+    /// The driver's own ray tracing: every invocation traces one ray with a ray query
+    /// against a BLAS/TLAS the driver built (`shaders/shadow_ray_query.wgsl`); needs a
+    /// device made with [`super::GpuOptions::ray_query`].
+    RayQuery,
     /// The quality yardstick: `rays` per pixel, to the same `rays` Hammersley
     /// points of the light for every pixel, traced per ray; no filter. The
     /// pixel's mask word holds the number of blocked rays instead of bits.
@@ -57,6 +61,7 @@ impl Tracer {
             Tracer::Mft => "shadow_mft",
             Tracer::Packet => "shadow_packet",
             Tracer::PerRay | Tracer::Reference { .. } => "shadow_per_ray",
+            Tracer::RayQuery => "shadow_ray_query",
         }
     }
 
@@ -72,13 +77,14 @@ impl fmt::Display for Tracer {
             Tracer::Mft => f.write_str("mft"),
             Tracer::Packet => f.write_str("packet"),
             Tracer::PerRay => f.write_str("per-ray"),
+            Tracer::RayQuery => f.write_str("ray-query"),
             Tracer::Reference { rays } if *rays == DEFAULT_REFERENCE_RAYS => f.write_str("reference"),
             Tracer::Reference { rays } => write!(f, "reference:{rays}"),
         }
     }
 }
 
-/// Parses `mft`, `packet`, `per-ray`, `reference` or `reference:N`.
+/// Parses `mft`, `packet`, `per-ray`, `ray-query`, `reference` or `reference:N`.
 impl FromStr for Tracer {
     type Err = String;
 
@@ -87,6 +93,7 @@ impl FromStr for Tracer {
             "mft" => Ok(Tracer::Mft),
             "packet" => Ok(Tracer::Packet),
             "per-ray" => Ok(Tracer::PerRay),
+            "ray-query" => Ok(Tracer::RayQuery),
             "reference" => Ok(Tracer::Reference {
                 rays: DEFAULT_REFERENCE_RAYS,
             }),
@@ -94,7 +101,7 @@ impl FromStr for Tracer {
                 Some(Ok(rays)) if (1..=65_535).contains(&rays) => Ok(Tracer::Reference { rays }),
                 Some(_) => Err(format!("`{s}`: reference rays must be a number in 1..=65535")),
                 None => Err(format!(
-                    "unknown tracer `{s}`; expected mft, packet, per-ray, reference or reference:N"
+                    "unknown tracer `{s}`; expected mft, packet, per-ray, ray-query, reference or reference:N"
                 )),
             },
         }
@@ -187,6 +194,7 @@ mod tests {
             Tracer::Mft,
             Tracer::Packet,
             Tracer::PerRay,
+            Tracer::RayQuery,
             Tracer::Reference { rays: 256 },
             Tracer::Reference { rays: 64 },
         ] {

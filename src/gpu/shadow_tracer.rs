@@ -82,6 +82,18 @@ impl ShadowTracer {
             Tracer::PerRay | Tracer::Reference { .. } => {
                 constants.push(("RAYS_PER_PIXEL", f64::from(tracer.rays_per_pixel())));
             }
+            Tracer::RayQuery => {
+                if !ctx
+                    .device
+                    .features()
+                    .contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY)
+                {
+                    return Err(Error::RayQueryUnsupported {
+                        adapter: ctx.info.name.clone(),
+                        driver: format!("{} {}", ctx.info.driver, ctx.info.driver_info),
+                    });
+                }
+            }
         }
         let aliases: &[(&str, &str)] = if tracer.uses_vector() {
             if variant == VectorVariant::Subgroup {
@@ -179,6 +191,25 @@ impl ShadowTracer {
         params: &ShadowParams,
     ) -> Result<wgpu::BindGroup> {
         let params = uniform_buffer_on(device, "shadow params", params);
+        if self.tracer == Tracer::RayQuery {
+            let tlas = scene.ray_query.as_ref().ok_or_else(|| {
+                Error::Gpu(
+                    "the ray-query tracer needs a GpuScene made on a device with ray queries \
+                     (GpuOptions::ray_query)"
+                        .into(),
+                )
+            })?;
+            return self.kernel.bind(
+                device,
+                &[
+                    buffer("params", &params),
+                    ("scene_tlas", tlas.tlas.as_binding()),
+                    buffer("gbuffer", image.gbuffer),
+                    buffer("light_points", image.light_points),
+                    buffer("masks", image.masks),
+                ],
+            );
+        }
         self.kernel.bind(
             device,
             &[

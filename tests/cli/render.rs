@@ -401,3 +401,66 @@ fn render_with_embree_matches_mft() {
         assert!(shadowed > 0, "{}: no shadow at all", s.name);
     }
 }
+
+/// `render --tracer ray-query`: where the adapter has ray queries (Mesa 25 lavapipe), the
+/// same unfiltered visibility as MFT on every generated scene (all but 0.1 % of the pixels
+/// with geometry, as for Embree above; both match the per-ray oracle, `tests/gpu/peers.rs`);
+/// elsewhere a failing exit status, one line on stderr that names the missing feature, and
+/// no output file. `PENUMBRA_REQUIRE_RAY_QUERY` (set by `.ci/run` on Mesa 25) makes the
+/// second case a failure.
+#[test]
+fn render_with_ray_query_matches_mft_or_names_the_missing_feature() {
+    for s in assets::EMBEDDED_SCENES {
+        let dir = out_dir(&format!("ray-query-{}", s.name));
+        let args = |tracer: &'static str, file: &'static str| {
+            [
+                "render",
+                s.name,
+                "--size",
+                "96x96",
+                "--tracer",
+                tracer,
+                "-o",
+                file,
+                "--aov",
+                "visibility",
+            ]
+        };
+        let out = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+            .args(args("ray-query", "r.exr"))
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        if !out.status.success() {
+            assert!(
+                std::env::var_os("PENUMBRA_REQUIRE_RAY_QUERY").is_none(),
+                "ray queries were required: {stderr}"
+            );
+            let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+            assert!(
+                lines.len() == 1
+                    && lines[0].starts_with("error: ray queries are missing")
+                    && lines[0].contains("EXPERIMENTAL_RAY_QUERY"),
+                "{stderr}"
+            );
+            assert!(!dir.join("r.exr").exists() && !dir.join("r.visibility.exr").exists());
+            eprintln!("{}: no ray queries here; checked the error: {}", s.name, lines[0]);
+            continue;
+        }
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(stdout.contains("tracer    ray-query"), "{stdout}");
+        penumbra(&dir, &args("mft", "m.exr"));
+        let r = read_float_image(&dir.join("r.visibility.exr")).unwrap();
+        let m = read_float_image(&dir.join("m.visibility.exr")).unwrap();
+        let differing = r.pixels.iter().zip(&m.pixels).filter(|(a, b)| a != b).count();
+        eprintln!("{}: ray-query and mft differ in {differing} pixels", s.name);
+        assert!(
+            differing * 1000 <= r.pixels.len(),
+            "{}: {differing} pixels differ",
+            s.name
+        );
+        let shadowed = r.pixels.iter().filter(|&&v| v < 1.0).count();
+        assert!(shadowed > 0, "{}: no shadow at all", s.name);
+    }
+}

@@ -1,4 +1,4 @@
-//! GPU tests (lavapipe where there is no GPU): every kernel against its CPU twin, frames, tiling, refinement, moving objects and the embedded pass. One binary, one device for all.
+//! GPU tests (lavapipe where there is no GPU): every kernel against its CPU twin, frames, tiling, refinement, moving objects, the embedded pass, and the peers (ray queries, Embree) as oracles. One binary, one device for all (and one more with ray queries where the adapter has them).
 
 #[path = "../support/mod.rs"]
 mod support;
@@ -9,6 +9,7 @@ mod far_from_origin;
 mod frame;
 mod loop_limit;
 mod motion;
+mod peers;
 mod primary_mft;
 mod refine;
 mod shadow_mft;

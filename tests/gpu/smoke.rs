@@ -235,6 +235,7 @@ fn bad_readback_ranges_are_errors() {
 fn unknown_adapter_lists_the_available_ones() {
     let err = GpuContext::new(&GpuOptions {
         adapter: Some("no-such-adapter".into()),
+        ..GpuOptions::default()
     })
     .expect_err("no adapter is called no-such-adapter");
     println!("error: {err}");
@@ -254,6 +255,7 @@ fn unknown_adapter_lists_the_available_ones() {
 fn adapter_by_index_and_by_name() {
     let first = GpuContext::new(&GpuOptions {
         adapter: Some("0".into()),
+        ..GpuOptions::default()
     })
     .unwrap_or_else(|e| panic!("adapter 0: {e}"));
     println!("adapter 0: {}", first.info);
@@ -261,11 +263,13 @@ fn adapter_by_index_and_by_name() {
     let part: String = first.info.name.chars().take(4).collect::<String>().to_uppercase();
     let by_name = GpuContext::new(&GpuOptions {
         adapter: Some(part.clone()),
+        ..GpuOptions::default()
     })
     .unwrap_or_else(|e| panic!("adapter named {part:?}: {e}"));
     assert!(by_name.info.name.to_uppercase().contains(&part));
     let err = GpuContext::new(&GpuOptions {
         adapter: Some("999".into()),
+        ..GpuOptions::default()
     })
     .expect_err("there are not 1000 adapters");
     assert!(matches!(err, Error::AdapterNotFound { .. }), "{err:?}");

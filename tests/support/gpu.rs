@@ -18,6 +18,38 @@ pub fn ctx() -> &'static GpuContext {
     })
 }
 
+/// Set (to anything) where the adapter must have ray queries (`.ci/run` on Mesa 25
+/// lavapipe): then [`ray_query_ctx`] fails instead of answering `None`.
+pub const REQUIRE_RAY_QUERY_ENV: &str = "PENUMBRA_REQUIRE_RAY_QUERY";
+
+/// A second context on the same adapter, made with ray queries; `Err` with the error's
+/// one-line message (which tests check) when the adapter has none, unless
+/// [`REQUIRE_RAY_QUERY_ENV`] is set; any other error fails the test.
+#[allow(dead_code)]
+pub fn ray_query_ctx() -> Result<&'static GpuContext, &'static str> {
+    static CTX: OnceLock<Result<GpuContext, String>> = OnceLock::new();
+    let made = CTX.get_or_init(|| {
+        match GpuContext::new(&GpuOptions {
+            ray_query: true,
+            ..GpuOptions::default()
+        }) {
+            Ok(ctx) => Ok(ctx),
+            Err(e @ penumbra::Error::RayQueryUnsupported { .. }) => Err(e.to_string()),
+            Err(e) => panic!("a context with ray queries: {e}"),
+        }
+    });
+    match made {
+        Ok(ctx) => Ok(ctx),
+        Err(e) => {
+            assert!(
+                std::env::var_os(REQUIRE_RAY_QUERY_ENV).is_none(),
+                "{REQUIRE_RAY_QUERY_ENV} is set, but: {e}"
+            );
+            Err(e)
+        }
+    }
+}
+
 /// The variants this adapter can run: always workgroup, subgroup when it has fixed 16k-wide subgroups.
 pub fn variants() -> Vec<VectorVariant> {
     let mut v = vec![VectorVariant::Workgroup];
@@ -58,17 +90,30 @@ pub fn try_trace_masks(
     view: &View,
     params: &penumbra::contract::layout::ShadowParams,
 ) -> penumbra::Result<(Vec<u32>, penumbra::gpu::ShadowStats)> {
+    try_trace_masks_on(ctx(), pass, gpu_scene, texels, view, params)
+}
+
+/// [`try_trace_masks`] on the device `ctx` (which made `pass` and `gpu_scene`).
+#[allow(dead_code)]
+pub fn try_trace_masks_on(
+    ctx: &GpuContext,
+    pass: &penumbra::gpu::ShadowTracer,
+    gpu_scene: &penumbra::gpu::GpuScene,
+    texels: &[penumbra::contract::layout::GBufferTexel],
+    view: &View,
+    params: &penumbra::contract::layout::ShadowParams,
+) -> penumbra::Result<(Vec<u32>, penumbra::gpu::ShadowStats)> {
     use penumbra::gpu::{empty_storage_buffer, read_buffer, storage_buffer};
     let points: Vec<[f32; 4]> = penumbra::sampling::light_points(&view.light)
         .iter()
         .map(|p| p.extend(0.0).to_array())
         .collect();
     let usage = wgpu::BufferUsages::empty();
-    let gbuffer = storage_buffer(ctx(), "G-buffer", texels, usage)?;
-    let light_points = storage_buffer(ctx(), "light points", &points, usage)?;
+    let gbuffer = storage_buffer(ctx, "G-buffer", texels, usage)?;
+    let light_points = storage_buffer(ctx, "light points", &points, usage)?;
     let bytes = u64::from(params.width * params.height) * 4;
     let masks = empty_storage_buffer(
-        ctx(),
+        ctx,
         "masks",
         bytes,
         wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
@@ -78,8 +123,8 @@ pub fn try_trace_masks(
         light_points: &light_points,
         masks: &masks,
     };
-    let stats = pass.run(ctx(), gpu_scene, &image, params, None, "shadow", &mut |_, _| {})?;
-    Ok((read_buffer(ctx(), &masks, 0..bytes)?, stats))
+    let stats = pass.run(ctx, gpu_scene, &image, params, None, "shadow", &mut |_, _| {})?;
+    Ok((read_buffer(ctx, &masks, 0..bytes)?, stats))
 }
 
 /// Whether this adapter's f32 arithmetic is compared exactly: on lavapipe (llvmpipe) two

@@ -49,7 +49,9 @@ pub struct BenchArgs {
     /// Shadow rays per pixel (the tracers compared here trace 16).
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(16..=16))]
     spp: u32,
-    /// Tracers to time, comma-separated: mft, packet, per-ray, and embree (Embree 3's
+    /// Tracers to time, comma-separated: mft, packet, per-ray, ray-query (the driver's ray
+    /// tracing, where the adapter has ray queries; its BLAS/TLAS build is reported
+    /// apart), and embree (Embree 3's
     /// `rtcOccluded16` on all CPU cores, the same rays and masks; needs a penumbra built with
     /// `--features embree`). MFT is always included (speedups are over it).
     #[arg(long, value_delimiter = ',', default_value = "mft,packet,per-ray", value_parser = parse_tracer)]
@@ -103,7 +105,9 @@ fn parse_tracer(s: &str) -> std::result::Result<BenchTracer, String> {
         };
     }
     match s.parse()? {
-        Tracer::Reference { .. } => Err("bench compares 16-ray tracers: mft, packet, per-ray, embree".into()),
+        Tracer::Reference { .. } => {
+            Err("bench compares 16-ray tracers: mft, packet, per-ray, ray-query, embree".into())
+        }
         t => Ok(BenchTracer::Gpu(t)),
     }
 }
@@ -130,9 +134,20 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         }
     }
     let cases = cases(args)?;
-    let ctx = GpuContext::new(&GpuOptions {
+    let options = |ray_query| GpuOptions {
         adapter: args.adapter.clone(),
-    })?;
+        ray_query,
+    };
+    // One command for every driver: where ray queries are missing, the others are still
+    // benched and the table says why ray-query is not among them.
+    let ctx = match GpuContext::new(&options(tracers.iter().any(|t| t.0 == Tracer::RayQuery))) {
+        Err(e @ Error::RayQueryUnsupported { .. }) => {
+            println!("  ray-query: not benched: {e}");
+            tracers.retain(|t| t.0 != Tracer::RayQuery);
+            GpuContext::new(&options(false))?
+        }
+        made => made?,
+    };
     let variant = args.vector.forced();
     let mut renderers = Vec::new();
     for &(tracer, shrink) in &tracers {
@@ -143,7 +158,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             shrink,
             ..RendererOptions::default()
         };
-        let counting = (!args.no_counters && tracer != Tracer::PerRay)
+        let counting = (!args.no_counters && tracer.uses_vector())
             .then(|| Renderer::new(&ctx, options(true)))
             .transpose()?;
         let name = if tracer == Tracer::Mft && !shrink {
@@ -175,6 +190,14 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             };
             let bvh = Bvh::build(&case.scene, &settings)?;
             let gpu_scene = GpuScene::new(&ctx, &case.scene, &bvh)?;
+            // Made only on a device with ray queries (asked for when ray-query is benched).
+            let ray_query_build_ms = gpu_scene.ray_query.as_ref().map(|rq| rq.build_ms);
+            if let Some(ms) = ray_query_build_ms {
+                progress!("\r{:100}\r", "");
+                println!(
+                    "  ray-query: BLAS + TLAS built by the driver in {ms:.1} ms wall (not in its times)"
+                );
+            }
             let frame_settings = FrameSettings::new(w, h);
             let mut tracer_results = Vec::new();
             let mut primary = Vec::new();
@@ -327,6 +350,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 primary: primary_results,
                 tracers: tracer_results,
                 embree_build_ms,
+                ray_query_build_ms,
                 animation,
                 reductions_vs_packet,
             };

@@ -117,6 +117,8 @@ pub(super) struct CaseResult {
     pub(super) tracers: Vec<TracerResult>,
     /// Embree's BVH build ms when it was benched (its times leave it out).
     pub(super) embree_build_ms: Option<f64>,
+    /// The driver's BLAS + TLAS build ms (wall, with the wait) when ray-query was benched.
+    pub(super) ray_query_build_ms: Option<f64>,
     /// The moving-object case, when the scene has an object to move.
     pub(super) animation: Option<AnimationResult>,
     /// Counter reductions of MFT against the packet tracer (packet / MFT).
