@@ -211,7 +211,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     {
         return Err(Error::invalid(
             "--refine",
-            "only the mft, packet and per-ray tracers are refined (exact and reference are not filtered)",
+            "only the mft, packet, per-ray, ray-query and embree tracers are refined (exact and reference are not filtered)",
         ));
     }
     let embree = args.tracer == TracerArg::Embree;
