@@ -569,3 +569,39 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod vector_group_tests {
+    /// With `VEC16_PER_WG = n` (the host's vectors per subgroup), every subgroup-vector
+    /// kernel's workgroup is `16 n` invocations once naga resolves the overrides as wgpu
+    /// does, so the host's `ceil(units / n)` workgroups cover every vector once.
+    #[test]
+    fn subgroup_vector_workgroups_hold_vec16_per_wg_vectors() {
+        for kernel in ["shadow_packet", "shadow_mft", "primary_mft"] {
+            let src = super::assemble(kernel, &[("shared/vec16", "shared/vec16_subgroup")]).unwrap();
+            let module = super::validate(&src).unwrap();
+            let info = naga::valid::Validator::new(
+                naga::valid::ValidationFlags::all(),
+                super::VALIDATION_CAPABILITIES,
+            )
+            .validate(&module)
+            .unwrap();
+            for n in [1u32, 2, 4] {
+                let mut constants = naga::back::PipelineConstants::default();
+                constants.insert("VEC16_PER_WG".to_owned(), f64::from(n));
+                let (resolved, _) = naga::back::pipeline_constants::process_overrides(
+                    &module,
+                    &info,
+                    Some((naga::ShaderStage::Compute, "main")),
+                    &constants,
+                )
+                .unwrap();
+                assert_eq!(
+                    resolved.entry_points[0].workgroup_size,
+                    [16 * n, 1, 1],
+                    "{kernel}, {n} vectors"
+                );
+            }
+        }
+    }
+}

@@ -1,24 +1,29 @@
 // The 16-wide vector as 16 lanes of one subgroup (ballot masked to the lane's 16-lane segment).
 // Needs Features::SUBGROUP and a fixed subgroup size that is a multiple of 16.
 
-// Vectors per workgroup = subgroup size / 16; the workgroup is one subgroup.
+// Vectors per workgroup = subgroup size / 16; the workgroup is meant to be one subgroup.
 override VEC16_PER_WG: u32 = 1u;
 override VEC16_WG_SIZE: u32 = 16u * VEC16_PER_WG;
 
 struct Vec16Ids {
     @builtin(subgroup_invocation_id) subgroup_index: u32,
     @builtin(workgroup_id) workgroup: vec3<u32>,
+    // The vector's index comes from the workgroup, not the subgroup: a driver may split
+    // the workgroup into smaller subgroups than it reports (lavapipe with
+    // LP_NATIVE_VECTOR_WIDTH=1024 reports 32 lanes and runs two subgroups of 16, whose
+    // subgroup_invocation_id both count 0..15). Lane bits stay subgroup-relative.
+    @builtin(local_invocation_index) local_index: u32,
 }
 
 var<private> g_lane: u32;     // 0..16: this invocation's lane in its vector
 var<private> g_vector: u32;   // index of this vector in the dispatch
 var<private> g_sid: u32;      // lane in the subgroup
-var<private> g_vector_in_wg: u32;  // index of this vector in its workgroup (= subgroup)
+var<private> g_vector_in_wg: u32;  // index of this vector in its workgroup
 
 fn vec16_init(ids: Vec16Ids) {
     g_sid = ids.subgroup_index;
     g_lane = ids.subgroup_index & 15u;
-    g_vector_in_wg = ids.subgroup_index >> 4u;
+    g_vector_in_wg = ids.local_index >> 4u;
     g_vector = ids.workgroup.x * VEC16_PER_WG + g_vector_in_wg;
 }
 
