@@ -25,24 +25,38 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         filtered[c_ix] = values[c_ix];
         return;
     }
-    let paired = paired_taps(gid.x, gid.y);
     // The window is a 4-pixel box centred on the pixel: 5×5 taps, the outer
     // ring at half weight (a quarter in the corners). Every one of the 16
     // sample sets then has weight 1 in a full window, and a gradient across
     // the window averages to the centre's value (an uncentred 4×4 window is
     // half a pixel off). Weights are powers of two: every product is exact.
-    var sum = vec4<f32>(0.0);
-    var weight_sum = 0.0;
-    for (var dy = -2; dy <= 2; dy++) {
-        let wy = select(1.0, 0.5, abs(dy) == 2);
-        for (var dx = -2; dx <= 2; dx++) {
-            if (paired & (1u << u32((dy + 2) * 5 + dx + 2))) == 0u {
-                continue;
-            }
-            let ix = u32(i32(gid.y) + dy) * filter_params.width + u32(i32(gid.x) + dx);
-            let w = wy * select(1.0, 0.5, abs(dx) == 2);
-            sum += values[ix] * w;
-            weight_sum += w;
+    // The taps go in mirror pairs through the centre (tap k and tap 24 - k,
+    // k < 12): a pair counts when both are similar (paired_taps' rule), so each
+    // tap is loaded once. The sum: centre first, then pair by pair, k increasing.
+    let n_c = normal[c_ix].xyz;
+    let v_c = values[c_ix];
+    var sum = v_c;
+    var weight_sum = 1.0;
+    for (var k = 0; k < 12; k++) {
+        let dy = k / 5 - 2;
+        let dx = k % 5 - 2;
+        let ax = i32(gid.x) + dx;
+        let ay = i32(gid.y) + dy;
+        let bx = i32(gid.x) - dx;
+        let by = i32(gid.y) - dy;
+        // dy <= 0 here, so a is never below the centre and b never above it.
+        let inside = ay >= 0 && by < i32(filter_params.height)
+            && min(ax, bx) >= 0 && max(ax, bx) < i32(filter_params.width);
+        if !inside {
+            continue;
+        }
+        let a = u32(ay) * filter_params.width + u32(ax);
+        let b = u32(by) * filter_params.width + u32(bx);
+        if similar_tap(a, d_c, n_c, v_c.w) && similar_tap(b, d_c, n_c, v_c.w) {
+            let w = select(1.0, 0.5, abs(dy) == 2) * select(1.0, 0.5, abs(dx) == 2);
+            sum += values[a] * w;
+            sum += values[b] * w;
+            weight_sum += 2.0 * w;
         }
     }
     filtered[c_ix] = sum / weight_sum;

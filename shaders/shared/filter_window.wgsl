@@ -18,6 +18,19 @@ struct FilterParams {
 // Every tap of the window: bit (dy + 2) * 5 + (dx + 2) for dx, dy in -2..=2.
 const FULL_WINDOW: u32 = 0x1ffffffu;
 
+// Whether the tap at index `ix` (inside the image) may be averaged with a centre of depth
+// `d_c`, normal `n_c` and unfiltered visibility `v_c`: a hit at a similar depth, normal and
+// visibility (the tolerances of `filter_params`).
+fn similar_tap(ix: u32, d_c: f32, n_c: vec3<f32>, v_c: f32) -> bool {
+    let d_n = depth[ix];
+    let n_n = normal[ix].xyz;
+    // Written out rather than dot() to fix the order of the products' sum.
+    let cos_nc = n_n.x * n_c.x + n_n.y * n_c.y + n_n.z * n_c.z;
+    return d_n > 0.0 && abs(d_n - d_c) <= filter_params.depth_tolerance * d_c
+        && cos_nc >= filter_params.normal_tolerance
+        && abs(values[ix].w - v_c) <= filter_params.visibility_tolerance;
+}
+
 // The taps of the window around (x, y) the filter uses: those at a similar depth, normal and
 // unfiltered visibility whose mirror image through the centre is used too (the centre always
 // is). The centre must have a hit (depth > 0).
@@ -38,13 +51,7 @@ fn paired_taps(x: u32, y: u32) -> u32 {
                 continue;
             }
             let ix = u32(ny) * filter_params.width + u32(nx);
-            let d_n = depth[ix];
-            let n_n = normal[ix].xyz;
-            // Written out rather than dot() to fix the order of the products' sum.
-            let cos_nc = n_n.x * n_c.x + n_n.y * n_c.y + n_n.z * n_c.z;
-            let similar = d_n > 0.0 && abs(d_n - d_c) <= filter_params.depth_tolerance * d_c
-                && cos_nc >= filter_params.normal_tolerance
-                && abs(values[ix].w - values[c_ix].w) <= filter_params.visibility_tolerance;
+            let similar = similar_tap(ix, d_c, n_c, values[c_ix].w);
             // The centre always counts, whatever the tolerances, so weight_sum >= 1.
             if (dx == 0 && dy == 0) || similar {
                 accepted |= 1u << u32((dy + 2) * 5 + dx + 2);

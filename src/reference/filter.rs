@@ -27,8 +27,8 @@
 //! 0.0253 / 0.0263, Sponza atrium 0.0084 / 0.0055, Sponza columns 0.0076 /
 //! 0.0059, Cornell box 0.0046 / 0.0035, bunny 0.0111 / 0.0096, duck 0.0082 /
 //! 0.0065, engine 0.0071 / 0.0051). [`filter_pixel`] is written the
-//! way the WGSL kernel is — one output pixel from its neighbours, `dy` outer,
-//! `dx` inner, increasing, sums in `f32` in that order (the weights are powers
+//! way the WGSL kernel is — one output pixel from its neighbours, the centre and then
+//! the taps in mirror pairs, sums in `f32` in that order (the weights are powers
 //! of two, so every product is exact) — so that the GPU's result matches it to rounding
 //! (within 1e-6 for values of order 1). Accept/reject decisions compare floats
 //! against the tolerances; inputs that sit within rounding of a threshold may
@@ -107,27 +107,39 @@ pub fn filter_pixel(
     if d_c <= 0.0 {
         return values[c_ix];
     }
-    let paired = paired_taps(params, values, depth, normal, x, y);
-    let mut sum = [0.0f32; 4];
-    let mut weight_sum = 0.0f32;
+    let v_c = values[c_ix];
+    let similar = |ix: usize| similar_tap(params, values, depth, normal, c_ix, ix);
     // The window is the 4-pixel box centred on the pixel: 5×5 taps, the outer
-    // ring at half weight (see the kernel). i32 like the kernel.
+    // ring at half weight (see the kernel). Its taps go in mirror pairs through the
+    // centre, tap k = (dy + 2)·5 + (dx + 2) with tap 24 − k for k < 12, and a pair
+    // counts when both taps are inside and similar — the taps of [`paired_taps`]. The
+    // sum, as the kernel's: the centre, then pair by pair, k increasing; component
+    // by component, as its vec4 arithmetic. i32 like the kernel.
     let weight = |d: i32| if d.abs() == 2 { 0.5f32 } else { 1.0 };
-    for dy in -2i32..=2 {
-        for dx in -2i32..=2 {
-            if paired & (1 << ((dy + 2) * 5 + dx + 2)) == 0 {
-                continue;
-            }
-            let ix = (y as i32 + dy) as usize * width + (x as i32 + dx) as usize;
-            // Component by component, as the kernel's vec4 arithmetic.
-            let w = weight(dy) * weight(dx);
-            let v = values[ix];
+    let mut sum = v_c;
+    let mut weight_sum = 1.0f32;
+    for k in 0i32..12 {
+        let (dy, dx) = (k / 5 - 2, k % 5 - 2);
+        let (ax, ay) = (x as i32 + dx, y as i32 + dy);
+        let (bx, by) = (x as i32 - dx, y as i32 - dy);
+        let inside =
+            |px: i32, py: i32| px >= 0 && py >= 0 && px < params.width as i32 && py < params.height as i32;
+        if !(inside(ax, ay) && inside(bx, by)) {
+            continue;
+        }
+        let a = ay as usize * width + ax as usize;
+        let b = by as usize * width + bx as usize;
+        if !(similar(a) && similar(b)) {
+            continue;
+        }
+        let w = weight(dy) * weight(dx);
+        for v in [values[a], values[b]] {
             sum[0] += v[0] * w;
             sum[1] += v[1] * w;
             sum[2] += v[2] * w;
             sum[3] += v[3] * w;
-            weight_sum += w;
         }
+        weight_sum += 2.0 * w;
     }
     let n = weight_sum;
     [sum[0] / n, sum[1] / n, sum[2] / n, sum[3] / n]
@@ -152,7 +164,6 @@ pub fn paired_taps(
 ) -> u32 {
     let width = params.width as usize;
     let c_ix = y as usize * width + x as usize;
-    let (d_c, n_c) = (depth[c_ix], normal[c_ix]);
     // First the taps the centre accepts, one bit each: bit (dy + 2)·5 + (dx + 2).
     let mut accepted = 0u32;
     for dy in -2i32..=2 {
@@ -166,9 +177,7 @@ pub fn paired_taps(
                 continue;
             }
             let ix = ny as usize * width + nx as usize;
-            let similar = same_surface(params, d_c, n_c, depth[ix], normal[ix])
-                && (values[ix][3] - values[c_ix][3]).abs() <= params.visibility_tolerance;
-            if (dx == 0 && dy == 0) || similar {
+            if (dx == 0 && dy == 0) || similar_tap(params, values, depth, normal, c_ix, ix) {
                 accepted |= 1 << ((dy + 2) * 5 + dx + 2);
             }
         }
@@ -176,6 +185,21 @@ pub fn paired_taps(
     // Then the taps whose mirror image through the centre is accepted too
     // (bit k's mirror is bit 24 − k; reversing 32 bits moves k to 31 − k).
     accepted & (accepted.reverse_bits() >> 7)
+}
+
+/// Whether tap `ix` may be averaged with the centre `c_ix`: on the same surface
+/// ([`same_surface`]) and with a similar unfiltered visibility (`values[..][3]`).
+/// WGSL twin: `similar_tap` in `shaders/shared/filter_window.wgsl`.
+fn similar_tap(
+    params: &FilterParams,
+    values: &[[f32; 4]],
+    depth: &[f32],
+    normal: &[[f32; 3]],
+    c_ix: usize,
+    ix: usize,
+) -> bool {
+    same_surface(params, depth[c_ix], normal[c_ix], depth[ix], normal[ix])
+        && (values[ix][3] - values[c_ix][3]).abs() <= params.visibility_tolerance
 }
 
 /// The filter's geometry test: a neighbour with depth `d_n` and normal `n_n`
@@ -280,6 +304,51 @@ mod tests {
         a.iter()
             .zip(&b)
             .all(|(p, q)| (p - q).abs() <= tolerance * q.abs().max(1.0))
+    }
+
+    /// The filter averages exactly the taps [`paired_taps`] names (its mirror-pair loop
+    /// and the refinement's window test must agree): on a rugged 9×7 image with depth
+    /// and normal edges, a tap's red channel set to 1 (all else 0; red is not tested)
+    /// reaches the output of a pixel exactly when that pixel's `paired_taps` has the tap.
+    #[test]
+    fn the_filter_averages_the_paired_taps() {
+        let (w, h) = (9u32, 7u32);
+        let mut f = Frame::plane(w, h, |_, _| [0.0, 0.0, 0.0, 0.5]);
+        for (i, (d, n)) in f.depth.iter_mut().zip(f.normal.iter_mut()).enumerate() {
+            // A depth step, a crease, a hole and a visibility edge, none near a tolerance.
+            let (x, y) = (i as u32 % w, i as u32 / w);
+            *d = if x >= 6 { 4.0 } else { 2.0 };
+            *n = if y >= 5 { [1.0, 0.0, 0.0] } else { UP };
+            if (x, y) == (2, 2) {
+                *d = 0.0;
+            }
+        }
+        f.values[3 * w as usize + 4][3] = 1.0;
+        f.params.visibility_tolerance = FilterParams::DEFAULT_VISIBILITY_TOLERANCE;
+        let (mut used, mut cut) = (0, 0);
+        for tap in 0..(w * h) as usize {
+            let mut one = f.values.clone();
+            one[tap][0] = 1.0;
+            let out = discontinuity_filter(&f.params, &one, &f.depth, &f.normal);
+            for y in 0..h {
+                for x in 0..w {
+                    let c = (y * w + x) as usize;
+                    if f.depth[c] <= 0.0 {
+                        continue;
+                    }
+                    let (dx, dy) = (tap as i32 % w as i32 - x as i32, tap as i32 / w as i32 - y as i32);
+                    let paired = paired_taps(&f.params, &one, &f.depth, &f.normal, x, y);
+                    let named =
+                        dx.abs() <= 2 && dy.abs() <= 2 && paired & (1 << ((dy + 2) * 5 + dx + 2)) != 0;
+                    assert_eq!(out[c][0] > 0.0, named, "tap {tap} at pixel ({x}, {y})");
+                    let in_window = dx.abs() <= 2 && dy.abs() <= 2 && (dx, dy) != (0, 0);
+                    used += usize::from(in_window && named);
+                    cut += usize::from(in_window && !named);
+                }
+            }
+        }
+        // Not vacuous: both outcomes occur.
+        assert!(used > 0 && cut > 0, "{used} taps used, {cut} cut");
     }
 
     #[test]
