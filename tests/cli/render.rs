@@ -369,37 +369,42 @@ fn an_interrupted_render_leaves_the_old_image_or_the_whole_new_one() {
 fn render_with_embree_matches_mft() {
     for s in assets::EMBEDDED_SCENES {
         let dir = out_dir(&format!("embree-{}", s.name));
-        for (tracer, file) in [("embree", "e.exr"), ("mft", "m.exr")] {
-            let stdout = penumbra(
-                &dir,
-                &[
-                    "render",
-                    s.name,
-                    "--size",
-                    "96x96",
-                    "--tracer",
-                    tracer,
-                    "-o",
-                    file,
-                    "--aov",
-                    "visibility",
-                ],
-            );
-            if tracer == "embree" {
-                assert!(stdout.contains("ms CPU (Embree)"), "{stdout}");
-            }
-        }
-        let e = read_float_image(&dir.join("e.visibility.exr")).unwrap();
-        let m = read_float_image(&dir.join("m.visibility.exr")).unwrap();
-        let differing = e.pixels.iter().zip(&m.pixels).filter(|(a, b)| a != b).count();
-        assert!(
-            differing * 1000 <= e.pixels.len(),
-            "{}: {differing} pixels differ",
-            s.name
-        );
-        let shadowed = e.pixels.iter().filter(|&&v| v < 1.0).count();
-        assert!(shadowed > 0, "{}: no shadow at all", s.name);
+        let stdout = penumbra(&dir, &visibility_args(s.name, "embree", "e.exr"));
+        assert!(stdout.contains("ms CPU (Embree)"), "{stdout}");
+        penumbra(&dir, &visibility_args(s.name, "mft", "m.exr"));
+        assert_same_visibility(&dir, "e", "m", s.name);
     }
+}
+
+/// `render SCENE --size 96x96 --tracer TRACER -o FILE --aov visibility`.
+fn visibility_args<'a>(scene: &'a str, tracer: &'a str, file: &'a str) -> [&'a str; 10] {
+    [
+        "render",
+        scene,
+        "--size",
+        "96x96",
+        "--tracer",
+        tracer,
+        "-o",
+        file,
+        "--aov",
+        "visibility",
+    ]
+}
+
+/// Asserts that `dir/A.visibility.exr` and `dir/B.visibility.exr` differ in at most 0.1 % of
+/// their pixels and show a shadow.
+fn assert_same_visibility(dir: &Path, a: &str, b: &str, label: &str) {
+    let a = read_float_image(&dir.join(format!("{a}.visibility.exr"))).unwrap();
+    let b = read_float_image(&dir.join(format!("{b}.visibility.exr"))).unwrap();
+    let differing = a.pixels.iter().zip(&b.pixels).filter(|(p, q)| p != q).count();
+    eprintln!("{label}: {differing} pixels differ");
+    assert!(
+        differing * 1000 <= a.pixels.len(),
+        "{label}: {differing} pixels differ"
+    );
+    let shadowed = a.pixels.iter().filter(|&&v| v < 1.0).count();
+    assert!(shadowed > 0, "{label}: no shadow at all");
 }
 
 /// `render --tracer ray-query`: where the adapter has ray queries (Mesa 25 lavapipe), the
@@ -412,22 +417,8 @@ fn render_with_embree_matches_mft() {
 fn render_with_ray_query_matches_mft_or_names_the_missing_feature() {
     for s in assets::EMBEDDED_SCENES {
         let dir = out_dir(&format!("ray-query-{}", s.name));
-        let args = |tracer: &'static str, file: &'static str| {
-            [
-                "render",
-                s.name,
-                "--size",
-                "96x96",
-                "--tracer",
-                tracer,
-                "-o",
-                file,
-                "--aov",
-                "visibility",
-            ]
-        };
         let out = Command::new(env!("CARGO_BIN_EXE_penumbra"))
-            .args(args("ray-query", "r.exr"))
+            .args(visibility_args(s.name, "ray-query", "r.exr"))
             .current_dir(&dir)
             .output()
             .unwrap();
@@ -450,17 +441,7 @@ fn render_with_ray_query_matches_mft_or_names_the_missing_feature() {
         }
         let stdout = String::from_utf8_lossy(&out.stdout);
         assert!(stdout.contains("tracer    ray-query"), "{stdout}");
-        penumbra(&dir, &args("mft", "m.exr"));
-        let r = read_float_image(&dir.join("r.visibility.exr")).unwrap();
-        let m = read_float_image(&dir.join("m.visibility.exr")).unwrap();
-        let differing = r.pixels.iter().zip(&m.pixels).filter(|(a, b)| a != b).count();
-        eprintln!("{}: ray-query and mft differ in {differing} pixels", s.name);
-        assert!(
-            differing * 1000 <= r.pixels.len(),
-            "{}: {differing} pixels differ",
-            s.name
-        );
-        let shadowed = r.pixels.iter().filter(|&&v| v < 1.0).count();
-        assert!(shadowed > 0, "{}: no shadow at all", s.name);
+        penumbra(&dir, &visibility_args(s.name, "mft", "m.exr"));
+        assert_same_visibility(&dir, "r", "m", s.name);
     }
 }
