@@ -44,8 +44,9 @@ struct Lighting {
 const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 fn main() {
-    // SAFETY: first thing in main, before any thread or Vulkan instance exists.
-    unsafe { penumbra::gpu::set_driver_defaults() };
+    // SAFETY: first thing in main, before any thread or Vulkan instance exists. This host
+    // rasterizes, so lavapipe keeps its 8 lanes (see the function's docs).
+    unsafe { penumbra::gpu::set_driver_defaults_for_drawing() };
     if let Err(e) = run() {
         eprintln!("error: {e}");
         std::process::exit(1);

@@ -34,16 +34,39 @@ pub const NO_DEVICE_SELECT_ENV: &str = "NODEVICE_SELECT";
 /// `main`, while no other thread runs, and before the first Vulkan instance is created
 /// (the driver and the loader read them when they load, once per process).
 pub unsafe fn set_driver_defaults() -> Vec<&'static str> {
+    // SAFETY: passed on from the caller.
+    unsafe { set_defaults(true) }
+}
+
+/// [`set_driver_defaults`] for a process that also draws with the GPU (a host application
+/// such as the `embed` example): only [`NO_DEVICE_SELECT_ENV`]. Lavapipe stays at its
+/// default 8 lanes (the shadow pass then runs the workgroup vector), because lavapipe's
+/// rasterizer crashes at 512-bit vectors on some CPUs: a single draw of a full-screen
+/// triangle with a constant colour into an `Rgba8Unorm` target dies in
+/// `llvm::ConstantVector::ConstantVector` (Mesa 22.3.6, SIGSEGV) or with a bus error
+/// (Mesa 25.0.7) while the driver compiles it, on a 2-core Intel Xeon with AVX-512
+/// (LLVM 15); at 256 bits it draws. Compute work is not affected.
+///
+/// # Safety
+///
+/// As [`set_driver_defaults`].
+pub unsafe fn set_driver_defaults_for_drawing() -> Vec<&'static str> {
+    // SAFETY: passed on from the caller.
+    unsafe { set_defaults(false) }
+}
+
+/// Sets the defaults; the vector width only when `vector_width`.
+unsafe fn set_defaults(vector_width: bool) -> Vec<&'static str> {
     let unset = |name: &str| std::env::var_os(name).is_none_or(|v| v.is_empty());
     let mut set = Vec::new();
-    if unset(LAVAPIPE_VECTOR_WIDTH_ENV) {
+    if vector_width && unset(LAVAPIPE_VECTOR_WIDTH_ENV) {
         set.push((LAVAPIPE_VECTOR_WIDTH_ENV, "512"));
     }
     if unset("XDG_RUNTIME_DIR") && unset("MESA_VK_DEVICE_SELECT") && unset(NO_DEVICE_SELECT_ENV) {
         set.push((NO_DEVICE_SELECT_ENV, "1"));
     }
     for &(name, value) in &set {
-        // SAFETY: the caller guarantees that no other thread runs.
+        // SAFETY: the caller of the public functions guarantees that no other thread runs.
         unsafe { std::env::set_var(name, value) };
     }
     set.into_iter().map(|(name, _)| name).collect()
