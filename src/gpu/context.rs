@@ -204,10 +204,7 @@ impl GpuContext {
         if opts.ray_query {
             if !offered.contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY) {
                 let info = adapter.get_info();
-                return Err(Error::RayQueryUnsupported {
-                    adapter: info.name,
-                    driver: format!("{} {}", info.driver, info.driver_info),
-                });
+                return Err(ray_queries_missing(&info.name, &info.driver, &info.driver_info));
             }
             required_features |= wgpu::Features::EXPERIMENTAL_RAY_QUERY;
         }
@@ -263,6 +260,14 @@ impl GpuContext {
             None => Ok(value),
             Some(e) => Err(Error::Gpu(format!("{what}: {e}"))),
         }
+    }
+}
+
+/// [`Error::RayQueryUnsupported`] for the adapter `name` and its driver.
+pub(super) fn ray_queries_missing(name: &str, driver: &str, driver_info: &str) -> Error {
+    Error::RayQueryUnsupported {
+        adapter: name.to_owned(),
+        driver: format!("{driver} {driver_info}"),
     }
 }
 

@@ -88,10 +88,12 @@ impl ShadowTracer {
                     .features()
                     .contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY)
                 {
-                    return Err(Error::RayQueryUnsupported {
-                        adapter: ctx.info.name.clone(),
-                        driver: format!("{} {}", ctx.info.driver, ctx.info.driver_info),
-                    });
+                    let info = &ctx.info;
+                    return Err(super::context::ray_queries_missing(
+                        &info.name,
+                        &info.driver,
+                        &info.driver_info,
+                    ));
                 }
             }
         }

@@ -417,11 +417,7 @@ fn assert_same_visibility(dir: &Path, a: &str, b: &str, label: &str) {
 fn render_with_ray_query_matches_mft_or_names_the_missing_feature() {
     for s in assets::EMBEDDED_SCENES {
         let dir = out_dir(&format!("ray-query-{}", s.name));
-        let out = Command::new(env!("CARGO_BIN_EXE_penumbra"))
-            .args(visibility_args(s.name, "ray-query", "r.exr"))
-            .current_dir(&dir)
-            .output()
-            .unwrap();
+        let out = run(&dir, &visibility_args(s.name, "ray-query", "r.exr"));
         let stderr = String::from_utf8_lossy(&out.stderr);
         if !out.status.success() {
             assert!(

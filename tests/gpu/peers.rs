@@ -20,7 +20,7 @@ use penumbra::reference::primary::primary_gbuffer;
 use penumbra::reference::shadow_per_ray::shadow_params;
 use penumbra::scene::Scene;
 use penumbra::scene::view::View;
-use penumbra::{Error, assets, sampling};
+use penumbra::{Error, assets};
 use support::gpu::{ctx, embedded, ray_query_ctx, try_trace_masks_on};
 
 /// One scene, view and image size, with its BVH and the CPU twin's G-buffer.
@@ -72,19 +72,14 @@ impl Case {
     /// Asserts that `a` and `b` (named in `what`) decide the same rays within the oracle
     /// comparison's tolerance; returns the rays that differ.
     fn assert_agree(&self, what: &str, a: &[u32], b: &[u32]) -> usize {
-        let params = shadow_params(&self.view.light, self.size.0, self.size.1);
-        let points = sampling::light_points(&self.view.light);
-        let corners: Vec<_> = self.scene.triangles.iter().map(|t| t.positions).collect();
-        let c = support::compare_masks(
+        let c = support::compare_view_masks(
             a,
             b,
+            &self.scene,
+            &self.bvh,
+            &self.view,
             &self.gbuffer,
             self.size.0,
-            &points,
-            &params,
-            &corners,
-            &support::own_triangle(&self.bvh),
-            support::edge_tolerance(&self.scene),
         );
         eprintln!("{} {what}: {c}", self.label);
         assert!(
@@ -238,6 +233,7 @@ fn ray_query_structures_follow_moving_objects() {
 #[test]
 fn every_gpu_tracer_matches_embree() {
     use penumbra::embree::EmbreeScene;
+    use penumbra::sampling;
     let (ctx, mut tracers) = match ray_query_ctx() {
         Ok(ctx) => (ctx, vec![Tracer::RayQuery]),
         Err(_) => (ctx(), vec![]),

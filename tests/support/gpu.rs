@@ -159,21 +159,7 @@ pub fn assert_same_rays(
         assert_eq!(a, b, "{label}: masks differ");
         return;
     }
-    let height = a.len() as u32 / width;
-    let params = penumbra::reference::shadow_per_ray::shadow_params(&view.light, width, height);
-    let points = penumbra::sampling::light_points(&view.light);
-    let corners: Vec<_> = scene.triangles.iter().map(|t| t.positions).collect();
-    let c = super::compare_masks(
-        a,
-        b,
-        gbuffer,
-        width,
-        &points,
-        &params,
-        &corners,
-        &super::own_triangle(bvh),
-        super::edge_tolerance(scene),
-    );
+    let c = super::compare_view_masks(a, b, scene, bvh, view, gbuffer, width);
     eprintln!("{label}: not compared bit for bit on {}: {c}", ctx().info.name);
     assert!(
         c.unexplained.is_empty() && c.differing * 1000 <= c.total,

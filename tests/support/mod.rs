@@ -312,6 +312,35 @@ pub fn own_triangle(bvh: &penumbra::bvh::Bvh) -> impl Fn(u32) -> Option<usize> +
     |t| bvh.triangles.get(t as usize).map(|t| t.scene_index as usize)
 }
 
+/// [`compare_masks`] of two tracings of `view`'s 16 interleaved rays per pixel over
+/// `gbuffer` (`width` wide) in `scene` (BVH `bvh`), at [`edge_tolerance`].
+#[allow(clippy::too_many_arguments)]
+pub fn compare_view_masks(
+    a: &[u32],
+    b: &[u32],
+    scene: &Scene,
+    bvh: &penumbra::bvh::Bvh,
+    view: &penumbra::scene::view::View,
+    gbuffer: &[penumbra::contract::layout::GBufferTexel],
+    width: u32,
+) -> MaskComparison {
+    let height = a.len() as u32 / width;
+    let params = penumbra::reference::shadow_per_ray::shadow_params(&view.light, width, height);
+    let points = penumbra::sampling::light_points(&view.light);
+    let corners: Vec<_> = scene.triangles.iter().map(|t| t.positions).collect();
+    compare_masks(
+        a,
+        b,
+        gbuffer,
+        width,
+        &points,
+        &params,
+        &corners,
+        &own_triangle(bvh),
+        edge_tolerance(scene),
+    )
+}
+
 /// The shadow-mask acceptance check of the renderer issue: `masks` against the
 /// per-ray oracle computed from the same `gbuffer`; at most 0.1 % of rays may
 /// differ, each excused by [`excuse`] at [`edge_tolerance`]. Prints the counts.
@@ -331,18 +360,7 @@ pub fn assert_masks_match_oracle(
     let params = shadow_params(&view.light, width, height);
     let points = penumbra::sampling::light_points(&view.light);
     let oracle = per_ray_masks(bvh, gbuffer, &points, &params);
-    let corners: Vec<_> = scene.triangles.iter().map(|t| t.positions).collect();
-    let c = compare_masks(
-        &oracle,
-        masks,
-        gbuffer,
-        width,
-        &points,
-        &params,
-        &corners,
-        &own_triangle(bvh),
-        edge_tolerance(scene),
-    );
+    let c = compare_view_masks(&oracle, masks, scene, bvh, view, gbuffer, width);
     eprintln!("{label}: against the per-ray oracle: {c}");
     assert!(
         c.unexplained.is_empty(),
