@@ -7,7 +7,7 @@ use penumbra::bvh::Bvh;
 use penumbra::contract::filter::FilterParams;
 use penumbra::contract::layout::MASK_SKY;
 use penumbra::gpu::{
-    FrameSettings, GpuContext, GpuOptions, GpuScene, LeafMode, Phase, PrimaryTracer, Renderer,
+    Ambient, FrameSettings, GpuContext, GpuOptions, GpuScene, LeafMode, Phase, PrimaryTracer, Renderer,
     RendererOptions, Tracer, VectorVariant,
 };
 use penumbra::output::{FloatImage, HdrImage, ToneMap, write_float_image, write_image};
@@ -144,6 +144,14 @@ pub struct RenderArgs {
     /// Exposure of the PNG tone map `1 - exp(-exposure * radiance)`.
     #[arg(long, default_value_t = 1.0)]
     exposure: f32,
+    /// Unshadowed ambient light for the image: the radiance of a uniform sky every surface
+    /// sees (a surface reflects albedo × it), so what the light does not reach is dark, not
+    /// black; 0 turns it off. Not in the visibility AOVs.
+    #[arg(long, default_value_t = Ambient::DEFAULT_RADIANCE, value_parser = parse_radiance)]
+    ambient: f32,
+    /// Linear RGB radiance of the pixels that see no geometry, as R,G,B.
+    #[arg(long, default_value = "0.03,0.03,0.04", value_parser = parse_rgb)]
+    background: Rgb,
     /// How the shadow kernel's 16-wide vector is built.
     #[arg(long, value_enum, default_value_t = VectorArg::Auto)]
     vector: VectorArg,
@@ -176,6 +184,34 @@ pub enum TracerArg {
     /// Embree 3's `rtcOccluded16` on all CPU cores, the same rays and masks as `packet`
     /// (needs a penumbra built with `--features embree`).
     Embree,
+}
+
+/// A linear RGB radiance given as `R,G,B`.
+#[derive(Clone, Copy, Debug)]
+pub struct Rgb(pub [f32; 3]);
+
+/// A radiance: a finite number ≥ 0.
+fn parse_radiance(s: &str) -> std::result::Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("'{s}' is not a radiance (a finite number ≥ 0)")),
+    }
+}
+
+/// Three radiances `R,G,B`, each a finite number ≥ 0.
+fn parse_rgb(s: &str) -> std::result::Result<Rgb, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    if parts.len() != 3 {
+        return Err(format!(
+            "'{s}' is not a colour R,G,B (three finite numbers ≥ 0, comma-separated)"
+        ));
+    }
+    let mut rgb = [0.0; 3];
+    for (c, p) in rgb.iter_mut().zip(parts) {
+        *c = parse_radiance(p)
+            .map_err(|_| format!("'{s}' is not a colour R,G,B (three finite numbers ≥ 0)"))?;
+    }
+    Ok(Rgb(rgb))
 }
 
 fn parse_tracer(s: &str) -> std::result::Result<TracerArg, String> {
@@ -371,7 +407,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let image = HdrImage {
         width,
         height,
-        pixels: frame.radiance(),
+        pixels: frame.image(&Ambient {
+            radiance: args.ambient,
+            background: args.background.0,
+        }),
     };
     write_image(
         &args.output,

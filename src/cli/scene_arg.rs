@@ -57,6 +57,21 @@ pub fn load_scene_and_view(scene_arg: Option<&Path>, view_arg: Option<&Path>) ->
                     format!("the default view for this scene is unusable ({m}); give one with --view"),
                 )
             })?;
+            let l = &view.light;
+            let centre = l.corner + 0.5 * (l.edge_u + l.edge_v);
+            eprintln!(
+                "note: {}: no view file, so a {:.3} × {:.3} quad light facing down is placed at {} \
+                 (a quarter of the bounds' diagonal above them){}; give your own with --view",
+                scene.source.display(),
+                l.edge_u.length(),
+                l.edge_v.length(),
+                fmt_point(centre),
+                if scene.camera.is_some() {
+                    ", the file's camera is used"
+                } else {
+                    ", and a camera looking at the bounds"
+                }
+            );
             view
         }
     };
@@ -78,6 +93,11 @@ pub fn load_scene_and_view(scene_arg: Option<&Path>, view_arg: Option<&Path>) ->
         eprintln!("warning: {}: {w}", scene.source.display());
     }
     Ok((scene, view))
+}
+
+/// A point as `[x, y, z]` with three decimals, as view files write it.
+fn fmt_point(p: glam::Vec3) -> String {
+    format!("[{:.3}, {:.3}, {:.3}]", p.x, p.y, p.z)
 }
 
 /// Moves a far scene and its view to the origin ([`Scene::recentre`]); returns the offset

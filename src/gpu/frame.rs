@@ -2,7 +2,41 @@
 //! timings and statistics.
 
 use super::ShadowStats;
-use crate::contract::layout::GBufferTexel;
+use crate::contract::layout::{GBufferTexel, MASK_SKY};
+
+/// Light the image gets besides the traced quad lights, so that what they do not reach is
+/// dark rather than black: an unshadowed ambient term and a background. It changes only
+/// [`Frame::image`], never the visibility or the masks.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ambient {
+    /// Radiance of a uniform sky that every surface sees unoccluded (no ambient occlusion:
+    /// it brightens shadows evenly); 0 turns it off.
+    pub radiance: f32,
+    /// Linear RGB radiance of pixels that see no geometry.
+    pub background: [f32; 3],
+}
+
+impl Ambient {
+    /// No ambient light, black background: the traced light alone.
+    pub const NONE: Ambient = Ambient {
+        radiance: 0.0,
+        background: [0.0; 3],
+    };
+    /// The CLI's default radiance: with exposure 1 an unlit white surface shows as sRGB ≈ 0.24.
+    pub const DEFAULT_RADIANCE: f32 = 0.05;
+    /// The CLI's default background: a dark blue-grey (sRGB ≈ 0.19, 0.19, 0.22 at exposure 1).
+    pub const DEFAULT_BACKGROUND: [f32; 3] = [0.03, 0.03, 0.04];
+}
+
+impl Default for Ambient {
+    /// [`Ambient::DEFAULT_RADIANCE`] and [`Ambient::DEFAULT_BACKGROUND`].
+    fn default() -> Ambient {
+        Ambient {
+            radiance: Ambient::DEFAULT_RADIANCE,
+            background: Ambient::DEFAULT_BACKGROUND,
+        }
+    }
+}
 
 /// A rendered frame, read back to the CPU (row-major, row 0 at the top).
 #[derive(Clone, Debug)]
@@ -48,6 +82,26 @@ impl Frame {
             .collect()
     }
 
+    /// The image with light the shadow pass does not trace: BRDF × (filtered irradiance +
+    /// π · `ambient.radiance`) where the pixel sees geometry (a uniform, unshadowed sky of
+    /// that radiance: a surface reflects albedo × it), `ambient.background` where it
+    /// does not. With [`Ambient::NONE`] this is [`Frame::radiance`].
+    pub fn image(&self, ambient: &Ambient) -> Vec<[f32; 3]> {
+        let sky = std::f32::consts::PI * ambient.radiance;
+        self.brdf
+            .iter()
+            .zip(&self.filtered)
+            .zip(&self.masks)
+            .map(|((b, e), &m)| {
+                if m & MASK_SKY != 0 {
+                    ambient.background
+                } else {
+                    [b[0] * (e[0] + sky), b[1] * (e[1] + sky), b[2] * (e[2] + sky)]
+                }
+            })
+            .collect()
+    }
+
     /// GPU milliseconds of the pass `name`, summed over its dispatches (0 when not timed).
     pub fn pass_ms(&self, name: &str) -> f64 {
         self.timed_ms(name).unwrap_or(0.0)
@@ -59,5 +113,55 @@ impl Frame {
         let mut times = self.timings.iter().filter(|(n, _)| n == name).peekable();
         times.peek()?;
         Some(times.map(|(_, ms)| ms).sum())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::output::ToneMap;
+
+    fn frame() -> Frame {
+        Frame {
+            width: 2,
+            height: 1,
+            masks: vec![0xff, MASK_SKY],
+            unfiltered: vec![[0.5, 1.0, 2.0, 0.5]; 2],
+            filtered: vec![[0.5, 1.0, 2.0, 0.5]; 2],
+            refined: vec![false; 2],
+            brdf: vec![[0.2, 0.1, 0.3, 0.0], [0.0; 4]],
+            gbuffer: None,
+            timings: Vec::new(),
+            shadow_stats: ShadowStats::default(),
+            primary_counters: crate::contract::counters::Counters::default(),
+            primary_fallback_pixels: 0,
+        }
+    }
+
+    #[test]
+    fn the_image_adds_ambient_to_surfaces_and_background_to_the_sky() {
+        let f = frame();
+        assert_eq!(f.image(&Ambient::NONE), f.radiance());
+        let a = Ambient {
+            radiance: 0.5,
+            background: [0.1, 0.2, 0.3],
+        };
+        let img = f.image(&a);
+        let sky = std::f32::consts::PI * 0.5;
+        assert_eq!(img[0], [0.2 * (0.5 + sky), 0.1 * (1.0 + sky), 0.3 * (2.0 + sky)]);
+        assert_eq!(img[1], [0.1, 0.2, 0.3]);
+    }
+
+    #[test]
+    fn default_ambient_shows_as_documented() {
+        // A white surface (BRDF 1/π) with no direct light reflects exactly the ambient radiance.
+        let tone = ToneMap::default();
+        let white = (1.0 / std::f32::consts::PI) * (std::f32::consts::PI * Ambient::DEFAULT_RADIANCE);
+        assert_eq!(tone.apply(white), 62, "sRGB ≈ 0.24");
+        assert_eq!(
+            tone.apply_rgb(Ambient::DEFAULT_BACKGROUND),
+            [48, 48, 56],
+            "sRGB ≈ 0.19, 0.19, 0.22"
+        );
     }
 }

@@ -270,11 +270,58 @@ fn legal_but_suspicious_views_render_with_a_warning() {
         "warning: up.json: the light faces away from the whole scene (every vertex is behind its \
          plane; it emits toward [0, 1, 0]): every surface is unlit\n"
     );
+    // Without ambient light and background the unlit image is black; with the defaults
+    // its surfaces (albedo × ambient) and background are dark but visible.
+    let dark = run(
+        &dir,
+        &[
+            "render",
+            "--view",
+            "up.json",
+            "--size",
+            "8x8",
+            "--ambient",
+            "0",
+            "--background",
+            "0,0,0",
+            "-o",
+            "black.png",
+        ],
+    );
+    assert!(dark.status.success(), "{}", String::from_utf8_lossy(&dark.stderr));
+    let black = read_hdr_image(&dir.join("black.png")).unwrap();
+    assert!(
+        black.pixels.iter().all(|p| *p == [0.0; 3]),
+        "an unlit image without ambient light is black"
+    );
     let image = read_hdr_image(&dir.join("up.png")).unwrap();
     assert!(
-        image.pixels.iter().all(|p| *p == [0.0; 3]),
-        "an unlit image is black"
+        image.pixels.iter().all(|p| p.iter().all(|&c| c > 0.0)),
+        "with the default ambient light and background no pixel of an unlit image is black"
     );
+}
+
+#[test]
+fn ambient_and_background_must_be_finite_and_not_negative() {
+    let dir = out_dir("ambient_args");
+    for args in [
+        ["--ambient", "-0.5"],
+        ["--ambient", "inf"],
+        ["--ambient", "NaN"],
+        ["--background", "1,2"],
+        ["--background", "1,2,x"],
+        ["--background", "0,-1,0"],
+    ] {
+        let arg = format!("{}={}", args[0], args[1]);
+        let out = run(&dir, &["render", "--size", "8x8", &arg, "-o", "out.png"]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains(args[0]) && stderr.contains("finite"),
+            "{args:?}: {stderr}"
+        );
+        assert!(!dir.join("out.png").exists(), "{args:?}");
+    }
 }
 
 #[test]
@@ -440,4 +487,25 @@ fn render_with_ray_query_matches_mft_or_names_the_missing_feature() {
         penumbra(&dir, &visibility_args(s.name, "mft", "m.exr"));
         assert_same_visibility(&dir, "r", "m", s.name);
     }
+}
+
+/// A glTF file without a view file gets a light above its bounds, and `render` says where;
+/// with the default ambient light no surface of the image is black.
+#[test]
+fn a_file_without_a_view_says_where_its_light_is_and_shows_every_surface() {
+    let dir = out_dir("no_view");
+    std::fs::write(dir.join("scene.glb"), assets::default_scene().glb).unwrap();
+    let out = run(&dir, &["render", "scene.glb", "--size", "32x32", "-o", "out.png"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.starts_with("note: scene.glb: no view file, so a ")
+            && stderr.contains("quad light facing down is placed at ["),
+        "{stderr}"
+    );
+    let image = read_hdr_image(&dir.join("out.png")).unwrap();
+    assert!(
+        image.pixels.iter().all(|p| p.iter().any(|&c| c > 0.0)),
+        "a black pixel"
+    );
 }
