@@ -45,6 +45,23 @@ pub fn run(args: &InfoArgs) -> penumbra::Result<()> {
     println!("materials    {}", scene.materials.len());
     println!("images       {}", scene.images.len());
     println!("instances    {}", scene.instances.len());
+    let emitters = super::scene_arg::file_lights(&scene);
+    println!(
+        "lights       {} emissive quad(s) in the file (used when no view file is given)",
+        emitters.lights.len()
+    );
+    for l in &emitters.lights {
+        println!(
+            "  quad       centre {:?} size {:.3} × {:.3} radiance {:?}",
+            (l.corner + 0.5 * (l.edge_u + l.edge_v)).to_array(),
+            l.edge_u.length(),
+            l.edge_v.length(),
+            (l.color * l.intensity).to_array()
+        );
+    }
+    for why in &emitters.unusable {
+        println!("  unusable   emissive geometry of {why}");
+    }
     match &scene.camera {
         Some(c) => println!(
             "camera       eye {:?} target {:?} fov {:.2}°",

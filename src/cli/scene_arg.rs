@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use penumbra::scene::view::View;
+use penumbra::scene::view::{QuadLight, View};
 use penumbra::{Result, assets, scene::Scene};
 
 /// Loads the scene the argument names: none → the built-in default scene; a
@@ -49,7 +49,11 @@ pub fn load_scene_and_view(scene_arg: Option<&Path>, view_arg: Option<&Path>) ->
         (Some(path), _) => View::load(path)?,
         (None, Some(view)) => view,
         (None, None) => {
-            let view = View::default_for(&scene.bounds(), scene.camera);
+            let mut view = View::default_for(&scene.bounds(), scene.camera);
+            let emitters = file_lights(&scene);
+            if let Some(light) = brightest(&emitters.lights) {
+                view.light = light;
+            }
             // The scene's bounds can be too large for a light above them.
             view.validate().map_err(|m| {
                 penumbra::Error::scene(
@@ -59,19 +63,46 @@ pub fn load_scene_and_view(scene_arg: Option<&Path>, view_arg: Option<&Path>) ->
             })?;
             let l = &view.light;
             let centre = l.corner + 0.5 * (l.edge_u + l.edge_v);
-            eprintln!(
-                "note: {}: no view file, so a {:.3} × {:.3} quad light facing down is placed at {} \
+            let camera = if scene.camera.is_some() {
+                "the file's camera"
+            } else {
+                "a camera looking at the bounds"
+            };
+            if !emitters.lights.is_empty() {
+                eprintln!(
+                    "note: {}: no view file: lit by the file's emissive quad at {} ({:.3} × {:.3}, \
+                     radiance {}){}; {camera}",
+                    scene.source.display(),
+                    fmt_point(centre),
+                    l.edge_u.length(),
+                    l.edge_v.length(),
+                    fmt_point(l.color * l.intensity),
+                    match emitters.lights.len() {
+                        1 => String::new(),
+                        n => format!(
+                            ", the most powerful of the {n} the file has (one light per view for now)"
+                        ),
+                    }
+                );
+            }
+            for why in &emitters.unusable {
+                eprintln!("warning: {}: emissive geometry of {why}", scene.source.display());
+            }
+            if emitters.lights.is_empty() {
+                eprintln!(
+                    "note: {}: no view file, so a {:.3} × {:.3} quad light facing down is placed at {} \
                  (a quarter of the bounds' diagonal above them){}; give your own with --view",
-                scene.source.display(),
-                l.edge_u.length(),
-                l.edge_v.length(),
-                fmt_point(centre),
-                if scene.camera.is_some() {
-                    ", the file's camera is used"
-                } else {
-                    ", and a camera looking at the bounds"
-                }
-            );
+                    scene.source.display(),
+                    l.edge_u.length(),
+                    l.edge_v.length(),
+                    fmt_point(centre),
+                    if scene.camera.is_some() {
+                        ", the file's camera is used"
+                    } else {
+                        ", and a camera looking at the bounds"
+                    }
+                );
+            }
             view
         }
     };
@@ -93,6 +124,22 @@ pub fn load_scene_and_view(scene_arg: Option<&Path>, view_arg: Option<&Path>) ->
         eprintln!("warning: {}: {w}", scene.source.display());
     }
     Ok((scene, view))
+}
+
+/// The quad lights of the file's emissive parallelograms, each a ray offset in front of
+/// its triangles ([`penumbra::scene::emitters::find`]).
+pub fn file_lights(scene: &Scene) -> penumbra::scene::emitters::Emitters {
+    let offset = scene.bounds().diagonal() * penumbra::pass_inputs::RAY_OFFSET_FRACTION;
+    penumbra::scene::emitters::find(scene, offset)
+}
+
+/// The light that emits the most power (radiance × area, summed over colour).
+fn brightest(lights: &[QuadLight]) -> Option<QuadLight> {
+    let power = |l: &QuadLight| (l.color * l.intensity).element_sum() * l.edge_u.cross(l.edge_v).length();
+    lights
+        .iter()
+        .copied()
+        .max_by(|a, b| power(a).total_cmp(&power(b)))
 }
 
 /// A point as `[x, y, z]` with three decimals, as view files write it.

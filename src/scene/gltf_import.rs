@@ -363,6 +363,7 @@ fn material(m: &gltf::Material) -> Material {
         },
         alpha_cutoff: m.alpha_cutoff().unwrap_or(0.5),
         double_sided: m.double_sided(),
+        emissive: (Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0)).to_array(),
     }
 }
 

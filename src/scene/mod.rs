@@ -3,6 +3,7 @@
 
 mod accessor;
 mod buffers;
+pub mod emitters;
 mod glb;
 mod gltf_import;
 pub mod view;
@@ -57,6 +58,10 @@ pub struct Material {
     pub alpha_cutoff: f32,
     /// Whether back faces are shaded as front faces.
     pub double_sided: bool,
+    /// Emitted linear RGB radiance: `emissiveFactor` × `KHR_materials_emissive_strength`
+    /// (no emissive texture). Where it is not zero the geometry may become a light
+    /// ([`crate::scene::emitters`]).
+    pub emissive: [f32; 3],
 }
 
 impl Default for Material {
@@ -69,6 +74,7 @@ impl Default for Material {
             alpha_mode: AlphaMode::Opaque,
             alpha_cutoff: 0.5,
             double_sided: false,
+            emissive: [0.0; 3],
         }
     }
 }

@@ -509,3 +509,101 @@ fn a_file_without_a_view_says_where_its_light_is_and_shows_every_surface() {
         "a black pixel"
     );
 }
+
+/// The Cornell box of `../shared/scenes` without a view file is lit by its luminaire (an
+/// emissive quad under the ceiling): `render` says so, the light faces down, and the mean
+/// visibility of the floor agrees with the CPU oracle's for that light within 1 % — and is
+/// far from 0, so the luminaire's own triangles do not block its rays.
+#[test]
+fn the_cornell_box_without_a_view_is_lit_by_its_luminaire() {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes/cornell_box/cornell_box.gltf");
+    if !file.exists() {
+        eprintln!("{} is missing: not tested", file.display());
+        return;
+    }
+    let dir = out_dir("cornell");
+    let file_arg = file.to_str().unwrap();
+    let out = run(
+        &dir,
+        &[
+            "render",
+            file_arg,
+            "--size",
+            "64x64",
+            "--aov",
+            "visibility",
+            "-o",
+            "out.exr",
+        ],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("lit by the file's emissive quad"), "{stderr}");
+
+    let scene = Scene::load(&file).unwrap();
+    let offset = scene.bounds().diagonal() * RAY_OFFSET_FRACTION;
+    let found = penumbra::scene::emitters::find(&scene, offset);
+    assert_eq!((found.lights.len(), found.unusable.len()), (1, 0), "{found:?}");
+    let light = found.lights[0];
+    let normal = light.edge_u.cross(light.edge_v);
+    assert!(
+        normal.normalize().y < -0.999,
+        "the luminaire faces down: {normal}"
+    );
+    assert!(
+        (normal.length() - 130.0 * 105.0).abs() < 1.0,
+        "area {}",
+        normal.length()
+    );
+
+    let vis = read_float_image(&dir.join("out.visibility.exr")).unwrap();
+    let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
+    let camera = scene.camera.expect("the Cornell box has a camera");
+    let cam = camera_params(&camera, 64, 64, offset);
+    let gbuffer = primary_gbuffer(&bvh, &ShadingData::new(&scene, &bvh).unwrap(), &cam);
+    let masks = per_ray_masks(
+        &bvh,
+        &gbuffer,
+        &sampling::light_points(&light),
+        &shadow_params(&light, 64, 64),
+    );
+    let floor: Vec<usize> = (0..masks.len())
+        .filter(|&p| masks[p] & MASK_SKY == 0 && gbuffer[p].normal.y > 0.99 && gbuffer[p].origin.y < 1.0)
+        .collect();
+    assert!(floor.len() > 200, "{} floor pixels", floor.len());
+    let mean = |f: &dyn Fn(usize) -> f64| floor.iter().map(|&p| f(p)).sum::<f64>() / floor.len() as f64;
+    let oracle = mean(&|p| f64::from(visibility(masks[p])));
+    let gpu = mean(&|p| f64::from(vis.pixels[p]));
+    eprintln!("Cornell floor: mean visibility {gpu:.4}, oracle {oracle:.4}");
+    assert!(oracle > 0.5, "the floor is lit: {oracle}");
+    assert!((gpu - oracle).abs() <= 0.01 * oracle, "{gpu} vs {oracle}");
+
+    // The luminaire's own triangles block none of its rays: the oracle's masks are the same
+    // with them taken out of the shadow rays' scene (the G-buffer stays that of the whole box).
+    let mut without = scene.clone();
+    without
+        .triangles
+        .retain(|t| scene.materials[t.material as usize].emissive == [0.0; 3]);
+    assert_eq!(without.triangles.len(), scene.triangles.len() - 2);
+    let bvh_without = Bvh::build(&without, &BvhSettings::default()).unwrap();
+    let shadow_gbuffer = primary_gbuffer(
+        &bvh_without,
+        &ShadingData::new(&without, &bvh_without).unwrap(),
+        &cam,
+    );
+    let masks_without = per_ray_masks(
+        &bvh_without,
+        &shadow_gbuffer,
+        &sampling::light_points(&light),
+        &shadow_params(&light, 64, 64),
+    );
+    let same_surface: Vec<usize> = (0..masks.len())
+        .filter(|&p| gbuffer[p].origin == shadow_gbuffer[p].origin)
+        .collect();
+    assert!(same_surface.len() > 3000, "{} pixels", same_surface.len());
+    let differing = same_surface
+        .iter()
+        .filter(|&&p| masks[p] != masks_without[p])
+        .count();
+    assert_eq!(differing, 0, "pixels whose rays the luminaire blocks");
+}
