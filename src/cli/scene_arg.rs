@@ -62,46 +62,33 @@ pub fn load_scene_and_view(scene_arg: Option<&Path>, view_arg: Option<&Path>) ->
                 )
             })?;
             let l = &view.light;
-            let centre = l.corner + 0.5 * (l.edge_u + l.edge_v);
+            let centre = fmt_point(l.corner + 0.5 * (l.edge_u + l.edge_v));
+            let (u, v) = (l.edge_u.length(), l.edge_v.length());
+            let source = scene.source.display();
             let camera = if scene.camera.is_some() {
                 "the file's camera"
             } else {
                 "a camera looking at the bounds"
             };
-            if !emitters.lights.is_empty() {
-                eprintln!(
-                    "note: {}: no view file: lit by the file's emissive quad at {} ({:.3} × {:.3}, \
-                     radiance {}){}; {camera}",
-                    scene.source.display(),
-                    fmt_point(centre),
-                    l.edge_u.length(),
-                    l.edge_v.length(),
+            match emitters.lights.len() {
+                0 => eprintln!(
+                    "note: {source}: no view file, so a {u:.3} × {v:.3} quad light facing down is placed \
+                     at {centre} (a quarter of the bounds' diagonal above them), with {camera}; give your \
+                     own with --view"
+                ),
+                n => eprintln!(
+                    "note: {source}: no view file: lit by the file's emissive quad at {centre} ({u:.3} × \
+                     {v:.3}, radiance {}){}, with {camera}",
                     fmt_point(l.color * l.intensity),
-                    match emitters.lights.len() {
-                        1 => String::new(),
-                        n => format!(
-                            ", the most powerful of the {n} the file has (one light per view for now)"
-                        ),
+                    if n == 1 {
+                        String::new()
+                    } else {
+                        format!(", the most powerful of the {n} the file has (one light per view for now)")
                     }
-                );
+                ),
             }
             for why in &emitters.unusable {
-                eprintln!("warning: {}: emissive geometry of {why}", scene.source.display());
-            }
-            if emitters.lights.is_empty() {
-                eprintln!(
-                    "note: {}: no view file, so a {:.3} × {:.3} quad light facing down is placed at {} \
-                 (a quarter of the bounds' diagonal above them){}; give your own with --view",
-                    scene.source.display(),
-                    l.edge_u.length(),
-                    l.edge_v.length(),
-                    fmt_point(centre),
-                    if scene.camera.is_some() {
-                        ", the file's camera is used"
-                    } else {
-                        ", and a camera looking at the bounds"
-                    }
-                );
+                eprintln!("warning: {source}: emissive geometry of {why}");
             }
             view
         }
