@@ -125,10 +125,12 @@ fn box_outside(n: vec3<f32>, node: BvhNode) -> bool {
 }
 
 // Whether a ray of this frustum may meet the box before its closest hit so far.
+// Branch-free (`&`, `|`, not `&&`, `||`): it is a ballot's predicate, and a short-circuit
+// operator is a lane-divergent branch right before the ballot.
 fn frustum_may_hit_box(node: BvhNode, depth: f32) -> bool {
-    return depth <= f_t_max * DEPTH_SLACK
-        && !(box_outside(f_side[0], node) || box_outside(f_side[1], node)
-            || box_outside(f_side[2], node) || box_outside(f_side[3], node));
+    return (depth <= f_t_max * DEPTH_SLACK)
+        & !(box_outside(f_side[0], node) | box_outside(f_side[1], node)
+            | box_outside(f_side[2], node) | box_outside(f_side[3], node));
 }
 
 fn all_outside(n: vec3<f32>, a0: vec3<f32>, a1: vec3<f32>, a2: vec3<f32>) -> bool {
@@ -215,9 +217,9 @@ fn main(ids: Vec16Ids) {
     // A 2-D dispatch: x = block column (VEC16_WG_SIZE / 16 per workgroup), y = block row.
     let bx = ids.workgroup.x * (VEC16_WG_SIZE / 16u) + g_vector_in_wg;
     let by = ids.workgroup.y;
-    if bx * 16u >= camera.width {
-        return;  // past the last block column (uniform: per vector)
-    }
+    // A vector past the last block column has no pixel inside (inside = 0): it never runs,
+    // but takes part in the loop's vector operations while others of its workgroup need
+    // them (see the loop), and writes nothing.
     let inside = setup_frustum(bx * 16u + (g_lane & 3u) * 4u, by * 16u + (g_lane >> 2u) * 4u);
     let order_dir = edge_dir(bx * 16u + 8u, by * 16u + 8u);
 
@@ -231,14 +233,14 @@ fn main(ids: Vec16Ids) {
     var popping = false;  // the next step pops the stack
     // Work counters (shared/counters), uniform; dead code unless COUNTERS.
     var n_steps = 0u;
-    var n_box_tests = 1u;  // the root's
+    var n_box_tests = u32(inside != 0u);  // the root's (a vector with no pixel tests nothing)
     var n_accessed = 0u;
     var n_after_culling = 0u;
     var n_triangle_tests = 0u;
 
     let root = load_node(0u);
     children = root.first;
-    mask = ballot16(inside != 0u && frustum_may_hit_box(root, box_depth(root)));
+    mask = ballot16((inside != 0u) & frustum_may_hit_box(root, box_depth(root)));
     var running = mask != 0u;
     if root.count > 0u {
         cursor = root.first;
@@ -246,87 +248,105 @@ fn main(ids: Vec16Ids) {
     }
     // One step per iteration: one leaf triangle, one stack pop, or one inner
     // node. No other loop in here: lavapipe counts every iteration of every
-    // loop an invocation runs, nested ones included, against one limit.
+    // loop an invocation runs, nested ones included, against one limit. The loop
+    // runs while any vector of the workgroup runs (group_any), and each step's
+    // vector operations run where any vector needs them (group_may), so that they
+    // stay in control flow uniform across the workgroup.
     var iterations = 0u;
     var overflow = false;
     loop {
-        if !running {
+        if !group_any(running) {
             break;
         }
         iterations += 1u;
         if iterations > ITERATION_BUDGET {
-            overflow = true;
+            overflow = running;
             break;
         }
         var enter = false;
-        if cursor < end {
-            let tri = load_triangle(cursor);
-            var tested = false;
-            if (mask & (1u << g_lane)) != 0u && !frustum_culls_triangle(tri) {
-                tested = true;
-                test_rays(tri, cursor);
-            }
+        let in_leaf = running && cursor < end;
+        let pops = running && !in_leaf && popping;
+        let visits = running && !in_leaf && !popping;
+        if group_may(in_leaf) {
+            let tri = load_triangle(select(0u, cursor, in_leaf));
+            let tested = in_leaf & ((mask & (1u << g_lane)) != 0u) & !frustum_culls_triangle(tri);
             if COUNTERS {
                 let survivors = ballot16(tested);
-                n_accessed += 1u;
+                n_accessed += u32(in_leaf);
                 n_after_culling += select(0u, 1u, survivors != 0u);
                 n_triangle_tests += countOneBits(survivors);
             }
-            cursor += 1u;
-            if cursor == end {
-                popping = true;
+            if tested {
+                test_rays(tri, cursor);
             }
-        } else if popping {
-            if depth == 0u {
-                running = false;
-            } else {
-                depth -= 1u;
-                // Frusta whose rays have all hit nearer than the box drop it
-                // (a compare with the stored depth, not a box test).
-                let m = stack_mask[depth] & ballot16(stack_depth[depth] <= f_t_max * DEPTH_SLACK);
-                if m != 0u {
-                    node = stack_node[depth];
-                    mask = m;
-                    popping = false;
-                    enter = true;
+            if in_leaf {
+                cursor += 1u;
+                if cursor == end {
+                    popping = true;
                 }
             }
-        } else {
-            n_steps += 1u;
-            n_box_tests += 2u;
-            let l = children;
+        }
+        if group_any(pops) {
+            // Frusta whose rays have all hit nearer than the box drop it
+            // (a compare with the stored depth, not a box test).
+            let top = select(0u, depth - 1u, pops & (depth > 0u));
+            let near = ballot16(pops & (depth > 0u) & (stack_depth[top] <= f_t_max * DEPTH_SLACK));
+            if pops {
+                if depth == 0u {
+                    running = false;
+                } else {
+                    depth -= 1u;
+                    let m = stack_mask[depth] & near;
+                    if m != 0u {
+                        node = stack_node[depth];
+                        mask = m;
+                        popping = false;
+                        enter = true;
+                    }
+                }
+            }
+        }
+        if group_any(visits) {
+            // Nodes 0 and 1 for a vector with nothing to visit (GpuScene holds two nodes at least).
+            let l = select(0u, children, visits);
             let pair = load_node_pair(l);
             let left = pair[0];
             let right = pair[1];
             let dl = box_depth(left);
             let dr = box_depth(right);
-            let mine = (mask & (1u << g_lane)) != 0u;
-            let ml = ballot16(mine && frustum_may_hit_box(left, dl));
-            let mr = ballot16(mine && frustum_may_hit_box(right, dr));
-            // Nearer child first; the other waits on the stack with its frusta.
-            let d = descend(l, ml, mr, order_key(right, order_dir) < order_key(left, order_dir));
-            if d.later_mask != 0u {
-                // The host checked that the BVH is shallower than the stack.
-                let top = min(depth, STACK_SIZE - 1u);
-                stack_node[top] = d.later;
-                stack_mask[top] = d.later_mask;
-                stack_depth[top] = select(dr, dl, d.later == l);
-                depth += 1u;
-            }
-            if d.mask != 0u {
-                node = d.node;
-                mask = d.mask;
-                enter = true;
-            } else {
-                popping = true;
+            let mine = visits & ((mask & (1u << g_lane)) != 0u);
+            let ml = ballot16(mine & frustum_may_hit_box(left, dl));
+            let mr = ballot16(mine & frustum_may_hit_box(right, dr));
+            if visits {
+                n_steps += 1u;
+                n_box_tests += 2u;
+                // Nearer child first; the other waits on the stack with its frusta.
+                let d = descend(l, ml, mr, order_key(right, order_dir) < order_key(left, order_dir));
+                if d.later_mask != 0u {
+                    // The host checked that the BVH is shallower than the stack.
+                    let top = min(depth, STACK_SIZE - 1u);
+                    stack_node[top] = d.later;
+                    stack_mask[top] = d.later_mask;
+                    stack_depth[top] = select(dr, dl, d.later == l);
+                    depth += 1u;
+                }
+                if d.mask != 0u {
+                    node = d.node;
+                    mask = d.mask;
+                    enter = true;
+                } else {
+                    popping = true;
+                }
             }
         }
-        if enter {
-            let c = load_node(node);
-            children = c.first;
-            if c.count > 0u {
-                cursor = c.first;
-                end = c.first + c.count;
+        if group_may(enter) {
+            let c = load_node(select(0u, node, enter));
+            if enter {
+                children = c.first;
+                if c.count > 0u {
+                    cursor = c.first;
+                    end = c.first + c.count;
+                }
             }
         }
     }

@@ -83,6 +83,7 @@ var<private> t_mask: u32;      // frusta that entered that node
 var<private> t_depth: u32;     // stack depth
 var<private> t_popping: bool;  // the next traversal step pops the stack
 var<private> t_done: bool;     // the stack ran empty: every leaf was found
+var<private> running: bool;    // the vector still traces (false: done, or no tile to trace)
 var<private> alive: u32;       // frusta not yet done
 var<private> p_first: u32;     // the pending leaf's triangles, first ..
 var<private> p_end: u32;       // .. end; 0: no leaf pending
@@ -105,8 +106,11 @@ fn corner(k: u32) -> vec3<f32> {
     return params.light_corners[k].xyz;
 }
 
+// Branch-free (`|`, not `||`), like every predicate a ballot takes here: a short-circuit
+// operator is a lane-divergent branch, and a ballot right after one would depend on the
+// driver reconverging the lanes.
 fn is_done() -> bool {
-    return (f_occluded & MASK_SKY) != 0u || (f_occluded & MASK_FULL) == MASK_FULL;
+    return ((f_occluded & MASK_SKY) != 0u) | ((f_occluded & MASK_FULL) == MASK_FULL);
 }
 
 // Same rules as reference::shadow_per_ray::initial_mask.
@@ -248,23 +252,16 @@ fn box_outside(n: vec3<f32>, p0: vec3<f32>, node: BvhNode) -> bool {
 
 // Twin: reference::mft::frustum_may_hit_box.
 fn frustum_may_hit_box(node: BvhNode) -> bool {
-    // The boxes' axes first: this catches boxes beside a thin frustum's apex
+    // The boxes' axes too: this catches boxes beside a thin frustum's apex
     // that straddle two of its planes (Sponza atrium 512²: 7 % fewer box tests).
-    if any(node.bmin > f_bmax) || any(node.bmax < f_bmin) {
-        return false;
-    }
-    return !(box_outside(f_side[0], f_origin, node) || box_outside(f_side[1], f_origin, node)
-        || box_outside(f_side[2], f_origin, node) || box_outside(f_side[3], f_origin, node)
-        || box_outside(f_geo, f_origin, node) || box_outside(params.light_normal, corner(0u), node));
+    let apart = any(node.bmin > f_bmax) | any(node.bmax < f_bmin);
+    return !(apart | box_outside(f_side[0], f_origin, node) | box_outside(f_side[1], f_origin, node)
+        | box_outside(f_side[2], f_origin, node) | box_outside(f_side[3], f_origin, node)
+        | box_outside(f_geo, f_origin, node) | box_outside(params.light_normal, corner(0u), node));
 }
 
 fn all_outside(n: vec3<f32>, b0: vec3<f32>, b1: vec3<f32>, b2: vec3<f32>) -> bool {
-    return dot(n, b0) < 0.0 && dot(n, b1) < 0.0 && dot(n, b2) < 0.0;
-}
-
-fn edge_culls(m: vec3<f32>, d: f32, k0: vec3<f32>, k1: vec3<f32>, k2: vec3<f32>, k3: vec3<f32>) -> bool {
-    let s = vec4<f32>(dot(m, k0), dot(m, k1), dot(m, k2), dot(m, k3));
-    return select(all(s > vec4<f32>(0.0)), all(s < vec4<f32>(0.0)), d > 0.0);
+    return (dot(n, b0) < 0.0) & (dot(n, b1) < 0.0) & (dot(n, b2) < 0.0);
 }
 
 // A triangle's edge planes through a ray origin `o`: normals m0, m1, m2 of
@@ -316,7 +313,7 @@ fn edge_values(e: EdgeFunctions, st: vec2<f32>) -> vec3<f32> {
 // Whether the ray to light coordinates `st` hits the triangle (before t_max).
 fn st_hit(e: EdgeFunctions, st: vec2<f32>) -> bool {
     let v = edge_values(e, st);
-    return all(v >= vec3<f32>(0.0)) && e.limit < params.t_max * (v.x + v.y + v.z);
+    return all(v >= vec3<f32>(0.0)) & (e.limit < params.t_max * (v.x + v.y + v.z));
 }
 
 fn ray_bit(j: u32, e: EdgeFunctions) -> u32 {
@@ -333,10 +330,10 @@ fn planes_cull(tri: BvhTriangle) -> bool {
     let a1 = v1 - o;
     let a2 = v2 - o;
     let c0 = corner(0u);
-    return all_outside(f_side[0], a0, a1, a2) || all_outside(f_side[1], a0, a1, a2)
-        || all_outside(f_side[2], a0, a1, a2) || all_outside(f_side[3], a0, a1, a2)
-        || all_outside(f_geo, a0, a1, a2)
-        || all_outside(params.light_normal, v0 - c0, v1 - c0, v2 - c0);
+    return all_outside(f_side[0], a0, a1, a2) | all_outside(f_side[1], a0, a1, a2)
+        | all_outside(f_side[2], a0, a1, a2) | all_outside(f_side[3], a0, a1, a2)
+        | all_outside(f_geo, a0, a1, a2)
+        | all_outside(params.light_normal, v0 - c0, v1 - c0, v2 - c0);
 }
 
 // Seen from this lane's origin the triangle is edge-on (d == 0), or the
@@ -344,23 +341,18 @@ fn planes_cull(tri: BvhTriangle) -> bool {
 // corner-ray test; an edge function is monotonic in s and t, also as rounded,
 // so no sample inside the rectangle is then inside the plane): no ray can hit.
 fn wedge_culls(w: Wedge, e: EdgeFunctions) -> bool {
-    if w.d == 0.0 {
-        return true;
-    }
     let v0 = edge_values(e, f_lo);
     let v1 = edge_values(e, vec2<f32>(f_hi.x, f_lo.y));
     let v2 = edge_values(e, f_hi);
     let v3 = edge_values(e, vec2<f32>(f_lo.x, f_hi.y));
-    return any(max(max(v0, v1), max(v2, v3)) < vec3<f32>(0.0));
+    return (w.d == 0.0) | any(max(max(v0, v1), max(v2, v3)) < vec3<f32>(0.0));
 }
 
-// No ray of this lane's frustum can hit the triangle (the culling half of test_triangle).
+// No ray of this lane's frustum can hit the triangle (the culling half of
+// test_triangle), computed branch-free: it is a ballot's predicate.
 fn frustum_culls_triangle(tri: BvhTriangle) -> bool {
-    if planes_cull(tri) {
-        return true;
-    }
     let w = triangle_wedge(tri, f_origin);
-    return wedge_culls(w, edge_functions(w, f_origin));
+    return planes_cull(tri) | wedge_culls(w, edge_functions(w, f_origin));
 }
 
 // Per-lane leaves: culls the triangle against this lane's frustum, else tests
@@ -388,7 +380,7 @@ fn test_triangle(tri: BvhTriangle) -> u32 {
 fn transposed_ray_hits(tri: BvhTriangle, f: u32) -> bool {
     let o = wg_origins[g_vector_in_wg * 16u + f];
     let w = triangle_wedge(tri, o);
-    return w.d != 0.0 && st_hit(edge_functions(w, o), point_st(light_points[f * 16u + g_lane].xyz, light_frame()));
+    return (w.d != 0.0) & st_hit(edge_functions(w, o), point_st(light_points[f * 16u + g_lane].xyz, light_frame()));
 }
 
 // Moves the traversal to a node (first child or triangle `first`, `count`
@@ -433,45 +425,58 @@ fn right_first(nl: BvhNode, nr: BvhNode) -> bool {
     return kr < kl;
 }
 
-// One step of the traversal stage, unless a found leaf waits or it is done:
-// pop the stack if it must, then visit the inner node it is at (both child
-// boxes against every frustum that entered it), into the child right_first picks.
+// One step of the traversal stage, unless the vector is done, a found leaf waits
+// or the traversal is over: pop the stack if it must, then visit the inner node it
+// is at (both child boxes against every frustum that entered it), into the child
+// right_first picks. The node loads and ballots run where any vector of the
+// workgroup needs them (group_may), with the others' lanes idle, so that they stay
+// in control flow uniform across the workgroup.
 fn traversal_step() {
-    if !t_done && p_end == 0u && t_popping {
+    let pops = running && !t_done && p_end == 0u && t_popping;
+    var popped = 0u;    // frusta that go on into the node popped
+    var pop_node = 0u;  // that node (0 when none: a valid index for the idle load)
+    if pops {
         if t_depth == 0u {
             t_done = true;
         } else {
             t_depth -= 1u;
-            let m = stack_mask[t_depth] & alive;
-            if m != 0u {
-                t_popping = false;
-                let c = load_node(stack_node[t_depth]);
-                enter(m, c.first, c.count);
-            }
+            popped = stack_mask[t_depth] & alive;
+            pop_node = stack_node[t_depth];
         }
     }
-    if !t_done && p_end == 0u && !t_popping {
-        let l = t_children;
+    if group_may(popped != 0u) {
+        let c = load_node(pop_node);
+        if popped != 0u {
+            t_popping = false;
+            enter(popped, c.first, c.count);
+        }
+    }
+    let visits = running && !t_done && p_end == 0u && !t_popping;
+    if group_any(visits) {
+        // Nodes 0 and 1 for a vector with nothing to visit (GpuScene holds two nodes at least).
+        let l = select(0u, t_children, visits);
         let pair = load_node_pair(l);
         let nl = pair[0];
         let nr = pair[1];
-        n_nodes += 1u;
-        n_boxes += 2u;
-        let mine = (t_mask & (1u << g_lane)) != 0u && !is_done();
-        let ml = ballot16(mine && frustum_may_hit_box(nl));
-        let mr = ballot16(mine && frustum_may_hit_box(nr));
-        let d = descend(l, ml, mr, right_first(nl, nr));
-        if d.later_mask != 0u {
-            // The host checked that the BVH is shallower than the stack.
-            stack_node[min(t_depth, STACK_SIZE - 1u)] = d.later;
-            stack_mask[min(t_depth, STACK_SIZE - 1u)] = d.later_mask;
-            t_depth += 1u;
-        }
-        if d.mask != 0u {
-            let right = d.node != l;
-            enter(d.mask, select(nl.first, nr.first, right), select(nl.count, nr.count, right));
-        } else {
-            t_popping = true;
+        let mine = visits & ((t_mask & (1u << g_lane)) != 0u) & !is_done();
+        let ml = ballot16(mine & frustum_may_hit_box(nl));
+        let mr = ballot16(mine & frustum_may_hit_box(nr));
+        if visits {
+            n_nodes += 1u;
+            n_boxes += 2u;
+            let d = descend(l, ml, mr, right_first(nl, nr));
+            if d.later_mask != 0u {
+                // The host checked that the BVH is shallower than the stack.
+                stack_node[min(t_depth, STACK_SIZE - 1u)] = d.later;
+                stack_mask[min(t_depth, STACK_SIZE - 1u)] = d.later_mask;
+                t_depth += 1u;
+            }
+            if d.mask != 0u {
+                let right = d.node != l;
+                enter(d.mask, select(nl.first, nr.first, right), select(nl.count, nr.count, right));
+            } else {
+                t_popping = true;
+            }
         }
     }
 }
@@ -479,18 +484,23 @@ fn traversal_step() {
 // Per-lane leaves: the next triangle of the current leaf against this lane's
 // frustum and its 16 rays.
 fn per_lane_triangle() {
-    let tri = load_triangle(cursor);
-    cursor += 1u;
-    n_tris += 1u;
-    var r = 0u;
-    if (leaf_mask & (1u << g_lane)) != 0u && !is_done() {
-        r = test_triangle(tri);
-    }
-    f_occluded |= r & MASK_FULL;
-    if COUNTERS {
-        let tested = ballot16((r & TESTED) != 0u);
-        n_tests += countOneBits(tested);
-        n_after_culling += u32(tested != 0u);
+    let tests = running && cursor < end;
+    if group_may(tests) {
+        let tri = load_triangle(select(0u, cursor, tests));
+        var r = 0u;
+        if tests && (leaf_mask & (1u << g_lane)) != 0u && !is_done() {
+            r = test_triangle(tri);
+        }
+        f_occluded |= r & MASK_FULL;
+        if COUNTERS {
+            let tested = ballot16((r & TESTED) != 0u);
+            n_tests += countOneBits(tested);
+            n_after_culling += u32(tested != 0u);
+        }
+        if tests {
+            cursor += 1u;
+            n_tris += 1u;
+        }
     }
 }
 
@@ -514,69 +524,73 @@ fn main(ids: Vec16Ids) {
     let ty = params.tile_origin_y + slot / params.tiles_x;
     let x = tx * 4u + (g_lane & 3u);
     let y = ty * 4u + (g_lane >> 2u);
-    let inside = x < params.width && y < params.height;
+    let base = slot * STATE_WORDS;
+    // Whether this vector traces a tile: one of the dispatch's, and on a resume round one
+    // that was suspended. A vector that does not still runs the loop's vector operations
+    // while others of its workgroup need them, with its lanes idle, and writes nothing.
+    var traces = slot < params.tiles_x * params.tiles_y;
+    if traces && params.resume != 0u {
+        traces = state[base + ST_STATUS] == STATUS_SUSPENDED;
+    }
+    let inside = traces && x < params.width && y < params.height;
     let pixel = y * params.width + x;
     let texel = gbuffer[min(pixel, arrayLength(&gbuffer) - 1u)];
     if LEAF_TRANSPOSED {
-        // Before any return: with several vectors per workgroup, every
-        // invocation must reach the barrier, including those of a vector past
-        // the last tile or with nothing to resume.
         wg_origins[g_vector_in_wg * 16u + g_lane] = texel.origin;
         workgroupBarrier();
     }
-    let base = slot * STATE_WORDS;
-    if slot >= params.tiles_x * params.tiles_y {
-        return;  // past the last tile of the dispatch (uniform: per vector)
-    }
-    if params.resume == 0u && g_lane == 0u {
+    if traces && params.resume == 0u && g_lane == 0u {
         // A fresh start: whatever an earlier dispatch left in this slot (another
         // chunk's tile, another frame's) must not be resumed.
         state[base + ST_STATUS] = 0u;
     }
-    if params.resume != 0u && uniform16(state[base + ST_STATUS]) != STATUS_SUSPENDED {
-        return;
-    }
+    // Outside the image or idle: every lane done (MASK_SKY), so no ballot counts it.
     setup_frustum(texel, g_lane, inside);
 
     var cand_tri: BvhTriangle;  // transposed leaves: triangle cursor - 1, loaded once for all its candidates
-    var running = true;
     var cut = false;  // a loop of this invocation was ended by the driver
     if params.resume != 0u {
-        t_children = uniform16(state[base + 1u]);
-        t_mask = uniform16(state[base + 2u]);
-        cursor = uniform16(state[base + 3u]);
-        end = uniform16(state[base + 4u]);
-        alive = uniform16(state[base + 5u]);
-        t_depth = uniform16(state[base + 6u]);
-        let flags = uniform16(state[base + 7u]);
-        t_popping = (flags & 1u) != 0u;
-        t_done = (flags & 2u) != 0u;
-        cand = uniform16(state[base + ST_CAND]);
-        leaf_mask = uniform16(state[base + ST_LEAF_MASK]);
-        p_first = uniform16(state[base + ST_PENDING]);
-        p_end = uniform16(state[base + ST_PENDING + 1u]);
-        p_mask = uniform16(state[base + ST_PENDING + 2u]);
-        if cand != 0u {
-            cand_tri = load_triangle(cursor - 1u);
-        }
-        f_occluded = state[base + ST_LANES + g_lane];
-        let shrunk_for = state[base + ST_SHRUNK + g_lane];
-        if SHRINK && (shrunk_for & SHRINK_FLAG) != 0u {
-            shrink_to(shrunk_for & MASK_FULL);
-        }
-        // At most STACK_SIZE passes, counted by lavapipe with the others (ITERATION_BUDGET).
-        var i = 0u;
-        loop {
-            if i >= t_depth {
-                break;
+        if traces {
+            t_children = state[base + 1u];
+            t_mask = state[base + 2u];
+            cursor = state[base + 3u];
+            end = state[base + 4u];
+            alive = state[base + 5u];
+            t_depth = state[base + 6u];
+            let flags = state[base + 7u];
+            t_popping = (flags & 1u) != 0u;
+            t_done = (flags & 2u) != 0u;
+            cand = state[base + ST_CAND];
+            leaf_mask = state[base + ST_LEAF_MASK];
+            p_first = state[base + ST_PENDING];
+            p_end = state[base + ST_PENDING + 1u];
+            p_mask = state[base + ST_PENDING + 2u];
+            f_occluded = state[base + ST_LANES + g_lane];
+            let shrunk_for = state[base + ST_SHRUNK + g_lane];
+            if SHRINK && (shrunk_for & SHRINK_FLAG) != 0u {
+                shrink_to(shrunk_for & MASK_FULL);
             }
-            stack_node[i] = uniform16(state[base + ST_STACK_NODE + i]);
-            stack_mask[i] = uniform16(state[base + ST_STACK_MASK + i]);
-            i += 1u;
+            // At most STACK_SIZE passes, counted by lavapipe with the others (ITERATION_BUDGET).
+            var i = 0u;
+            loop {
+                if i >= t_depth {
+                    break;
+                }
+                stack_node[i] = state[base + ST_STACK_NODE + i];
+                stack_mask[i] = state[base + ST_STACK_MASK + i];
+                i += 1u;
+            }
+            // Ended by the driver before the stack was read: report it, trace nothing.
+            cut = i < t_depth;
+            running = !cut;
         }
-        // Ended by the driver before the stack was read: report it, trace nothing.
-        cut = i < t_depth;
-        running = !cut;
+        let has_cand = running && cand != 0u;
+        if group_may(has_cand) {
+            let t = load_triangle(select(0u, cursor - 1u, has_cand));
+            if has_cand {
+                cand_tri = t;
+            }
+        }
     } else {
         if SHRINK && !is_done() {
             // Start from the rectangle of the samples themselves (rays below
@@ -585,8 +599,8 @@ fn main(ids: Vec16Ids) {
         }
         alive = ballot16(!is_done());
         let root = load_node(0u);
-        let m = ballot16(!is_done() && frustum_may_hit_box(root));
-        n_boxes = 1u;
+        let m = ballot16(!is_done() & frustum_may_hit_box(root));
+        n_boxes = u32(traces);
         running = m != 0u;
         enter(m, root.first, root.count);
     }
@@ -602,14 +616,16 @@ fn main(ids: Vec16Ids) {
     // pass of either loop towards its limit: a loop nested in another costs it
     // a pass each time the outer body runs, even when no lane enters it. So
     // nothing else loops in here (the state is saved after the loop).
+    // The loop runs while any vector of the workgroup runs (group_any), so that its
+    // vector operations stay in uniform control flow; the others idle along.
     var iterations = 0u;
     var suspended = false;
     loop {
-        if !running {
+        if !group_any(running) {
             break;
         }
         if iterations >= params.iteration_budget {
-            suspended = true;
+            suspended = running;
             break;
         }
         iterations += 1u;
@@ -617,47 +633,56 @@ fn main(ids: Vec16Ids) {
         traversal_step();
         traversal_step();
         take_pending();
-        let in_leaf = cand != 0u || cursor < end;
+        let in_leaf = running && (cand != 0u || cursor < end);
         // With cand != 0 a resumed tile goes on with the candidates of triangle cursor - 1.
-        if LEAF_TRANSPOSED && cand == 0u && cursor < end {
-            cand_tri = load_triangle(cursor);
-            cursor += 1u;
-            n_tris += 1u;
-            let mine = (leaf_mask & (1u << g_lane)) != 0u && !is_done();
-            cand = ballot16(mine && !frustum_culls_triangle(cand_tri));
-            n_tests += countOneBits(cand);
-            n_after_culling += u32(cand != 0u);
+        if LEAF_TRANSPOSED {
+            let starts = running && cand == 0u && cursor < end;
+            if group_any(starts) {
+                let t = load_triangle(select(0u, cursor, starts));
+                let mine = starts & ((leaf_mask & (1u << g_lane)) != 0u) & !is_done();
+                let c = ballot16(mine & !frustum_culls_triangle(t));
+                if starts {
+                    cand_tri = t;
+                    cursor += 1u;
+                    n_tris += 1u;
+                    cand = c;
+                    n_tests += countOneBits(c);
+                    n_after_culling += u32(c != 0u);
+                }
+            }
         }
-        if !LEAF_TRANSPOSED && cursor < end {
+        if !LEAF_TRANSPOSED {
             per_lane_triangle();
-        }
-        if !LEAF_TRANSPOSED && cursor < end {
             per_lane_triangle();
         }
         if LEAF_TRANSPOSED {
             // The candidate frusta, lowest first: frustum f meets the triangle
             // with all 16 lanes, one ray each. An inner loop rather than a step
             // each, because lavapipe runs the whole body above (every branch,
-            // masked) at every step. `cand` and `f` come from ballots: uniform.
+            // masked) at every step. `cand` and `f` come from ballots: the same
+            // in every lane of the vector.
             loop {
                 iterations += 1u;
-                if cand == 0u || iterations >= params.iteration_budget {
+                if !group_any(cand != 0u) || iterations >= params.iteration_budget {
                     break;  // out of budget: the rest wait in `cand`
                 }
-                let f = firstTrailingBit(cand);
+                let has = cand != 0u;
+                let f = select(0u, firstTrailingBit(cand), has);
                 cand &= cand - 1u;
-                let bits = ballot16(transposed_ray_hits(cand_tri, f));
-                if g_lane == f {
-                    f_occluded |= bits;
-                }
+                let bits = ballot16(has & transposed_ray_hits(cand_tri, f));
+                f_occluded |= select(0u, bits, has && g_lane == f);
             }
         }
-        if in_leaf && cand == 0u && cursor == end {
-            if SHRINK {
-                shrink_after_leaf();
+        let leaf_ends = in_leaf && cand == 0u && cursor == end;
+        if SHRINK && leaf_ends {
+            shrink_after_leaf();
+        }
+        if group_any(leaf_ends) {
+            let a = ballot16(!is_done());
+            if leaf_ends {
+                alive = a;
+                running = a != 0u;
             }
-            alive = ballot16(!is_done());
-            running = alive != 0u;
         }
         if t_done && p_end == 0u && cand == 0u && cursor >= end {
             running = false;
@@ -672,6 +697,9 @@ fn main(ids: Vec16Ids) {
         atomicAdd(&status[WORD_TRIANGLES_ACCESSED], n_tris);
         atomicAdd(&status[WORD_TRIANGLES_AFTER_CULLING], n_after_culling);
         atomicAdd(&status[WORD_TRIANGLE_TESTS], n_tests);
+    }
+    if !traces {
+        return;
     }
     if cut {
         // The masks of this tile are incomplete: write none, and let the host fail the pass.

@@ -38,33 +38,34 @@ fn main(ids: Vec16Ids) {
     let slot = g_vector;
     let x = params.tile_origin_x + slot % params.tiles_x;
     let y = params.tile_origin_y + slot / params.tiles_x;
-    if slot >= params.tiles_x * params.tiles_y {
-        return;  // uniform: per vector
-    }
     let base = slot * PACKET_STATE_WORDS;
-    if params.resume == 0u && g_lane == 0u {
+    // Whether this vector traces a pixel: one of the dispatch's, and on a resume round one
+    // that was suspended. A vector that does not still runs the loop's vector operations
+    // while others of its workgroup need them (shadow_mft.wgsl), and writes nothing.
+    var traces = slot < params.tiles_x * params.tiles_y;
+    if traces && params.resume != 0u {
+        traces = state[base + ST_STATUS] == STATUS_SUSPENDED;
+    }
+    if traces && params.resume == 0u && g_lane == 0u {
         // A fresh start: whatever an earlier dispatch left in this slot (another
         // chunk's pixel, another frame's) must not be resumed.
         state[base + ST_STATUS] = 0u;
     }
-    if params.resume != 0u && uniform16(state[base + ST_STATUS]) != STATUS_SUSPENDED {
-        return;
-    }
     let pixel = y * params.width + x;
-    let texel = gbuffer[pixel];
-    if texel.depth <= 0.0 {
-        if g_lane == 0u {
-            masks[pixel] = MASK_SKY;
-        }
-        return;  // uniform: every lane reads the same texel
+    let texel = gbuffer[min(pixel, arrayLength(&gbuffer) - 1u)];
+    let sky = texel.depth <= 0.0;  // the same in every lane: they read one texel
+    if traces && sky && g_lane == 0u {
+        masks[pixel] = MASK_SKY;
     }
+    let traces_rays = traces && !sky;
     let origin = texel.origin;
     let set_ix = (x & 3u) + 4u * (y & 3u);
     let dir = light_points[set_ix * 16u + g_lane].xyz - origin;
     let inv_dir = safe_inverse(dir);
     let c0 = params.light_corners[0].xyz;
-    // Same rules as reference::shadow_per_ray::initial_mask.
-    var blocked = dot(params.light_normal, origin - c0) <= 0.0 || dot(texel.geo_normal, dir) <= 0.0;
+    // Same rules as reference::shadow_per_ray::initial_mask; an idle vector's rays count
+    // as blocked, so that no ballot counts them.
+    var blocked = !traces_rays || dot(params.light_normal, origin - c0) <= 0.0 || dot(texel.geo_normal, dir) <= 0.0;
 
     var node = 0u;
     var children = 0u;  // the first child of `node` (when it is an inner node), read when entering it
@@ -74,40 +75,42 @@ fn main(ids: Vec16Ids) {
     var alive = 0u;
     var depth = 0u;
     var popping = 0u;
-    var running = true;
+    var running = false;
     var cut = false;  // a loop of this invocation was ended by the driver
     var n_nodes = 0u;
     var n_boxes = 0u;
     var n_tris = 0u;
     if params.resume != 0u {
-        node = uniform16(state[base + 1u]);
-        children = load_node(node).first;
-        mask = uniform16(state[base + 2u]);
-        cursor = uniform16(state[base + 3u]);
-        end = uniform16(state[base + 4u]);
-        alive = uniform16(state[base + 5u]);
-        depth = uniform16(state[base + 6u]);
-        popping = uniform16(state[base + 7u]);
-        blocked = state[base + ST_LANES + g_lane] != 0u;
-        // At most STACK_SIZE passes, counted by lavapipe with the others.
-        var i = 0u;
-        loop {
-            if i >= depth {
-                break;
+        if traces_rays {
+            node = state[base + 1u];
+            mask = state[base + 2u];
+            cursor = state[base + 3u];
+            end = state[base + 4u];
+            alive = state[base + 5u];
+            depth = state[base + 6u];
+            popping = state[base + 7u];
+            blocked = state[base + ST_LANES + g_lane] != 0u;
+            // At most STACK_SIZE passes, counted by lavapipe with the others.
+            var i = 0u;
+            loop {
+                if i >= depth {
+                    break;
+                }
+                stack_node[i] = state[base + ST_STACK_NODE + i];
+                stack_mask[i] = state[base + ST_STACK_MASK + i];
+                i += 1u;
             }
-            stack_node[i] = uniform16(state[base + ST_STACK_NODE + i]);
-            stack_mask[i] = uniform16(state[base + ST_STACK_MASK + i]);
-            i += 1u;
+            // Ended by the driver before the stack was read: report it, trace nothing.
+            cut = i < depth;
+            running = !cut;
         }
-        // Ended by the driver before the stack was read: report it, trace nothing.
-        cut = i < depth;
-        running = !cut;
+        children = load_node(node).first;
     } else {
         alive = ballot16(!blocked);
         let root = load_node(0u);
         children = root.first;
-        mask = ballot16(!blocked && intersect_box(origin, inv_dir, root, params.t_max) >= 0.0);
-        n_boxes = 1u;
+        mask = ballot16(!blocked & (intersect_box(origin, inv_dir, root, params.t_max) >= 0.0));
+        n_boxes = u32(traces_rays);
         running = mask != 0u;
         if root.count > 0u {
             cursor = root.first;
@@ -116,33 +119,44 @@ fn main(ids: Vec16Ids) {
     }
 
     // One step per iteration, as in shadow_mft.wgsl: a leaf triangle, a stack
-    // pop, or an inner node (lavapipe counts every loop pass, so one loop).
+    // pop, or an inner node (lavapipe counts every loop pass, so one loop). The
+    // loop runs while any vector of the workgroup runs, as there.
     var iterations = 0u;
     var suspended = false;
     loop {
-        if !running {
+        if !group_any(running) {
             break;
         }
         if iterations >= params.iteration_budget {
-            suspended = true;
+            suspended = running;
             break;
         }
         iterations += 1u;
         var enter = false;
-        if cursor < end {
-            let tri = load_triangle(cursor);
-            cursor += 1u;
-            n_tris += 1u;
-            let mine = (mask & alive & (1u << g_lane)) != 0u;
-            if mine && intersect_triangle(tri, origin, dir, params.t_max).x > 0.0 {
-                blocked = true;
+        let in_leaf = running && cursor < end;
+        let pops = running && !in_leaf && popping != 0u;
+        let visits = running && !in_leaf && popping == 0u;
+        if group_may(in_leaf) {
+            let tri = load_triangle(select(0u, cursor, in_leaf));
+            if in_leaf {
+                cursor += 1u;
+                n_tris += 1u;
+                let mine = (mask & alive & (1u << g_lane)) != 0u;
+                if mine && intersect_triangle(tri, origin, dir, params.t_max).x > 0.0 {
+                    blocked = true;
+                }
             }
-            if cursor == end {
-                alive = ballot16(!blocked);
-                running = alive != 0u;
-                popping = 1u;
+            let leaf_ends = in_leaf && cursor == end;
+            if group_any(leaf_ends) {
+                let a = ballot16(!blocked);
+                if leaf_ends {
+                    alive = a;
+                    running = a != 0u;
+                    popping = 1u;
+                }
             }
-        } else if popping != 0u {
+        }
+        if pops {
             if depth == 0u {
                 running = false;
             } else {
@@ -155,39 +169,46 @@ fn main(ids: Vec16Ids) {
                     enter = true;
                 }
             }
-        } else {
-            let l = children;
-            n_nodes += 1u;
-            n_boxes += 2u;
-            let mine = (mask & alive & (1u << g_lane)) != 0u;
+        }
+        if group_any(visits) {
+            // Nodes 0 and 1 for a vector with nothing to visit (GpuScene holds two nodes at least).
+            let l = select(0u, children, visits);
             let pair = load_node_pair(l);
-            let ml = ballot16(mine && intersect_box(origin, inv_dir, pair[0], params.t_max) >= 0.0);
-            let mr = ballot16(mine && intersect_box(origin, inv_dir, pair[1], params.t_max) >= 0.0);
-            // Into the child more rays want first.
-            let d = descend(l, ml, mr, countOneBits(mr) > countOneBits(ml));
-            if d.later_mask != 0u {
-                // The host checked that the BVH is shallower than the stack.
-                stack_node[min(depth, STACK_SIZE - 1u)] = d.later;
-                stack_mask[min(depth, STACK_SIZE - 1u)] = d.later_mask;
-                depth += 1u;
-            }
-            if d.mask != 0u {
-                node = d.node;
-                mask = d.mask;
-                enter = true;
-            } else {
-                popping = 1u;
+            let mine = visits & ((mask & alive & (1u << g_lane)) != 0u);
+            let ml = ballot16(mine & (intersect_box(origin, inv_dir, pair[0], params.t_max) >= 0.0));
+            let mr = ballot16(mine & (intersect_box(origin, inv_dir, pair[1], params.t_max) >= 0.0));
+            if visits {
+                n_nodes += 1u;
+                n_boxes += 2u;
+                // Into the child more rays want first.
+                let d = descend(l, ml, mr, countOneBits(mr) > countOneBits(ml));
+                if d.later_mask != 0u {
+                    // The host checked that the BVH is shallower than the stack.
+                    stack_node[min(depth, STACK_SIZE - 1u)] = d.later;
+                    stack_mask[min(depth, STACK_SIZE - 1u)] = d.later_mask;
+                    depth += 1u;
+                }
+                if d.mask != 0u {
+                    node = d.node;
+                    mask = d.mask;
+                    enter = true;
+                } else {
+                    popping = 1u;
+                }
             }
         }
-        if enter {
-            let c = load_node(node);
-            children = c.first;
-            if c.count > 0u {
-                cursor = c.first;
-                end = c.first + c.count;
+        if group_may(enter) {
+            let c = load_node(select(0u, node, enter));
+            if enter {
+                children = c.first;
+                if c.count > 0u {
+                    cursor = c.first;
+                    end = c.first + c.count;
+                }
             }
         }
     }
+    let bits = ballot16(blocked);
     // The loop stops only by finishing (running = false) or by suspending; left any
     // other way, lavapipe ended it (its per-invocation iteration limit).
     cut = cut || (running && !suspended);
@@ -198,6 +219,9 @@ fn main(ids: Vec16Ids) {
         atomicAdd(&status[WORD_TRIANGLES_ACCESSED], n_tris);
         atomicAdd(&status[WORD_TRIANGLES_AFTER_CULLING], n_tris);
         atomicAdd(&status[WORD_TRIANGLE_TESTS], n_tris);
+    }
+    if !traces_rays {
+        return;
     }
     if cut {
         // This pixel's mask is incomplete: write none, and let the host fail the pass.
@@ -236,7 +260,6 @@ fn main(ids: Vec16Ids) {
         }
         return;
     }
-    let bits = ballot16(blocked);
     if g_lane == 0u {
         masks[pixel] = bits;
         if params.resume != 0u {

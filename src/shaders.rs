@@ -571,6 +571,9 @@ mod tests {
 }
 
 #[cfg(test)]
+mod vector_uniformity;
+
+#[cfg(test)]
 mod vector_group_tests {
     /// With `VEC16_PER_WG = n` (the host's vectors per subgroup), every subgroup-vector
     /// kernel's workgroup is `16 n` invocations once naga resolves the overrides as wgpu

@@ -1,5 +1,11 @@
 // The 16-wide vector as 16 lanes of one subgroup (ballot masked to the lane's 16-lane segment).
 // Needs Features::SUBGROUP and a fixed subgroup size that is a multiple of 16.
+//
+// Every function here is a subgroup operation, so the kernels call them only where control
+// flow is uniform across the workgroup (= the subgroup): branches that hold them test
+// group_any, never a per-vector value, when a subgroup holds several vectors. The workgroup
+// variant (shared/vec16_workgroup) makes the same calls barriers, so naga's uniformity
+// analysis checks every call site of both variants.
 
 // Vectors per workgroup = subgroup size / 16; the workgroup is meant to be one subgroup.
 override VEC16_PER_WG: u32 = 1u;
@@ -32,10 +38,20 @@ fn ballot16(pred: bool) -> u32 {
     return (b[g_sid >> 5u] >> (g_sid & 16u)) & 0xffffu;
 }
 
-// Every lane of a vector computes the same value already (the kernels only
-// pass values loaded from the same address), so nothing needs exchanging.
-fn uniform16(value: u32) -> u32 {
-    return value;
+// Whether `b` holds for any vector of the workgroup; `b` must be the same in all 16 lanes
+// of a vector. The result is the same in every invocation of the subgroup, so a branch on
+// it keeps the subgroup's control flow uniform. With one vector per subgroup that is `b`.
+fn group_any(b: bool) -> bool {
+    if VEC16_PER_WG == 1u {
+        return b;
+    }
+    return subgroupAny(b);
+}
+
+// A branch guard for work without ballots (loads through vec16_words) that a vector with
+// `b` false may skip: here exactly group_any. (The workgroup variant takes it always.)
+fn group_may(b: bool) -> bool {
+    return group_any(b);
 }
 
 // Whether BVH reads go through vec16_words (shared/bvh_vec16): here, yes.

@@ -26,6 +26,8 @@ pub enum VectorArg {
     Subgroup,
     /// A 16-invocation workgroup exchanging through workgroup memory (works everywhere).
     Workgroup,
+    /// Four such vectors in a 64-invocation workgroup (fills a GPU's warps).
+    Workgroup4,
 }
 
 impl VectorArg {
@@ -35,6 +37,7 @@ impl VectorArg {
             VectorArg::Auto => None,
             VectorArg::Subgroup => Some(VectorVariant::Subgroup),
             VectorArg::Workgroup => Some(VectorVariant::Workgroup),
+            VectorArg::Workgroup4 => Some(VectorVariant::Workgroup4),
         }
     }
 }

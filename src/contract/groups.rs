@@ -9,6 +9,11 @@ pub const PIXEL_GROUP: u32 = 8;
 /// refinement's list slots, the self-test's nodes).
 pub const LINE_GROUP: u32 = 64;
 
+/// Most 16-wide vectors one workgroup of the workgroup vector variant holds
+/// (`shaders/shared/vec16_workgroup.wgsl`, which sizes its exchange slots by it; the
+/// host's `VEC16_PER_WG` never exceeds it): 4, a 64-invocation workgroup.
+pub const MAX_VEC16_PER_WG: u32 = 4;
+
 /// The workgroup size each non-vector kernel declares (`@workgroup_size`), which the
 /// host's dispatches assume (checked by a naga test).
 pub const KERNEL_GROUPS: &[(&str, [u32; 3])] = &[

@@ -56,6 +56,7 @@ mod tests {
             // shared/groups
             ("PIXEL_GROUP", U32(groups::PIXEL_GROUP)),
             ("LINE_GROUP", U32(groups::LINE_GROUP)),
+            ("MAX_VEC16_PER_WG", U32(groups::MAX_VEC16_PER_WG)),
             // shared/intersect
             ("BOX_EXIT_SCALE", F32(intersect::BOX_EXIT_SCALE)),
             // shared/layout, shared/surface

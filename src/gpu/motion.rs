@@ -117,7 +117,10 @@ impl GpuScene {
         let mut gpu = GpuScene::new(ctx, scene, bvh)?;
         let mut nodes = bvh.nodes.clone();
         nodes.resize(
-            bvh.nodes.len().max(2 * n_tris.saturating_sub(1) + 1),
+            bvh.nodes
+                .len()
+                .max(2 * n_tris.saturating_sub(1) + 1)
+                .max(super::scene_buffers::MIN_GPU_NODES),
             BvhNode::default(),
         );
         let nodes = super::scene_buffers::nodes_from(&nodes, gpu.origin);

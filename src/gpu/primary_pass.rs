@@ -152,9 +152,7 @@ impl PrimaryPass {
             PrimaryTracer::PerRay => ("primary", &[][..], None, 1),
             PrimaryTracer::Mft => {
                 let (variant, per_wg) = VectorVariant::choose(&ctx.info, variant)?;
-                if variant == VectorVariant::Subgroup {
-                    constants.push(("VEC16_PER_WG", f64::from(per_wg)));
-                }
+                constants.push(("VEC16_PER_WG", f64::from(per_wg)));
                 ("primary_mft", variant.aliases(), Some(variant), per_wg)
             }
         };

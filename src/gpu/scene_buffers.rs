@@ -81,6 +81,11 @@ fn relative<T: Clone>(items: &[T], origin: Vec3, shift: impl Fn(&T, Vec3) -> T) 
     Cow::Owned(items.iter().map(|x| shift(x, origin)).collect())
 }
 
+/// Nodes the GPU buffer holds at least. The vector kernels load a child pair even for a
+/// vector with nothing to visit (so that their subgroup operations stay in control flow
+/// uniform across the workgroup), nodes 0 and 1, which a one-leaf BVH does not have.
+pub(super) const MIN_GPU_NODES: usize = 2;
+
 /// `nodes` relative to `origin`. Rounding is monotonic, so a box still holds its
 /// triangles' moved corners.
 pub(super) fn nodes_from(nodes: &[BvhNode], origin: Vec3) -> Cow<'_, [BvhNode]> {
@@ -89,6 +94,14 @@ pub(super) fn nodes_from(nodes: &[BvhNode], origin: Vec3) -> Cow<'_, [BvhNode]> 
         bmax: n.bmax - o,
         ..*n
     })
+}
+
+/// `nodes` with unused nodes appended up to [`MIN_GPU_NODES`].
+fn padded(mut nodes: Cow<'_, [BvhNode]>) -> Cow<'_, [BvhNode]> {
+    if nodes.len() < MIN_GPU_NODES {
+        nodes.to_mut().resize(MIN_GPU_NODES, BvhNode::default());
+    }
+    nodes
 }
 
 /// `triangles` relative to `origin`.
@@ -137,7 +150,7 @@ impl GpuScene {
             None
         };
         Ok(GpuScene {
-            nodes: storage_buffer(ctx, "BVH nodes", &nodes_from(&bvh.nodes, origin), usage)?,
+            nodes: storage_buffer(ctx, "BVH nodes", &padded(nodes_from(&bvh.nodes, origin)), usage)?,
             triangles,
             shading: storage_buffer(ctx, "shading triangles", &shading.triangles, usage)?,
             materials: storage_buffer(ctx, "materials", &shading.materials, usage)?,

@@ -98,9 +98,7 @@ impl ShadowTracer {
             }
         }
         let aliases: &[(&str, &str)] = if tracer.uses_vector() {
-            if variant == VectorVariant::Subgroup {
-                constants.push(("VEC16_PER_WG", f64::from(vectors_per_workgroup)));
-            }
+            constants.push(("VEC16_PER_WG", f64::from(vectors_per_workgroup)));
             variant.aliases()
         } else {
             &[]

@@ -507,6 +507,10 @@ fn a_closed_room_lit_from_outside_is_dark_for_every_tracer() {
 /// ([`penumbra::reference::shadow_mft::dispatch_tile`]): the state of its traversal (node,
 /// masks, cursor, pending leaf, stack), every lane's mask and shrunk rectangle. Checked
 /// after one dispatch of the embedded recording path, whose scratch the test can read.
+/// Not for transposed leaves with four vectors per workgroup: there the inner loop over a
+/// triangle's frusta runs for the workgroup's vectors together and counts its passes
+/// against all of them, so a vector suspends at another point than alone (its masks
+/// after resuming are the oracle's all the same: tests/gpu/shadow_mft.rs).
 #[test]
 fn a_suspended_tile_saves_the_state_the_twin_saves() {
     use penumbra::contract::shadow::STATE_WORDS;
@@ -528,6 +532,7 @@ fn a_suspended_tile_saves_the_state_the_twin_saves() {
         for (leaf_mode, variant) in variants()
             .into_iter()
             .flat_map(|v| [(LeafMode::PerLane, v), (LeafMode::Transposed, v)])
+            .filter(|&(mode, v)| !(mode == LeafMode::Transposed && v == VectorVariant::Workgroup4))
         {
             let options = TracerOptions {
                 variant: Some(variant),
