@@ -8,14 +8,14 @@ use penumbra::contract::filter::FilterParams;
 use penumbra::contract::layout::MASK_SKY;
 use penumbra::gpu::{
     Ambient, FrameSettings, GpuContext, GpuOptions, GpuScene, LeafMode, Phase, PrimaryTracer, Renderer,
-    RendererOptions, Tracer, VectorVariant,
+    RendererOptions, Tracer, VectorVariant, image_of_lights,
 };
 use penumbra::output::{FloatImage, HdrImage, ToneMap, write_float_image, write_image};
 use penumbra::scene::view_checks::view_warnings;
 use penumbra::{Error, Result};
 
 use super::BvhArgs;
-use super::scene_arg::{builtin_names, load_scene_and_view};
+use super::scene_arg::{builtin_names, load_scene_and_views};
 
 /// `--vector` values.
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -292,14 +292,20 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         });
     }
     let (width, height) = args.size;
-    let (scene, view) = load_scene_and_view(args.scene.as_deref(), args.view.as_deref())?;
+    let (scene, file) = load_scene_and_views(args.scene.as_deref(), args.view.as_deref())?;
+    let views = file.views();
     let bvh = Bvh::build(&scene, &args.bvh.settings())?;
     let view_name = args
         .view
         .as_ref()
         .map_or_else(|| "view".to_owned(), |p| p.display().to_string());
-    for w in view_warnings(&view, &scene, &bvh) {
-        eprintln!("warning: {view_name}: {w}");
+    for (i, view) in views.iter().enumerate() {
+        for w in view_warnings(view, &scene, &bvh) {
+            match views.len() {
+                1 => eprintln!("warning: {view_name}: {w}"),
+                _ => eprintln!("warning: {view_name}: light {}: {w}", i + 1),
+            }
+        }
     }
     println!(
         "scene     {} — {} triangles, BVH {} nodes in {:.1} ms",
@@ -349,7 +355,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     // Lavapipe compiles a pipeline at its first dispatch: a tiny frame first
     // keeps compilation out of the timings below.
     progress!("compiling kernels…\r");
-    renderer.render(&ctx, &gpu_scene, &view, &FrameSettings::new(8, 8))?;
+    renderer.render(&ctx, &gpu_scene, &views[0], &FrameSettings::new(8, 8))?;
     let unit = tracer.unit();
     let rays_per_pixel = f64::from(tracer.rays_per_pixel());
     let start = Instant::now();
@@ -363,57 +369,96 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             if unit == 4 { "tiles of 4x4" } else { "pixels" }
         );
     };
-    let frame = if embree {
-        embree_frame(&ctx, &renderer, &gpu_scene, &bvh, &view, &settings, &mut report)?
+    let frames = if embree {
+        // Embree's masks come per light; each light's frame traces its own primary pass.
+        let mut frames = Vec::with_capacity(views.len());
+        for view in &views {
+            frames.push(embree_frame(
+                &ctx,
+                &renderer,
+                &gpu_scene,
+                &bvh,
+                view,
+                &settings,
+                &mut report,
+            )?);
+        }
+        frames
     } else {
-        renderer.render_with_progress(&ctx, &gpu_scene, &view, &settings, &mut report)?
+        renderer.render_lights(&ctx, &gpu_scene, &views, &settings, &mut report)?
     };
     progress!("\r{:60}\r", "");
     let wall = start.elapsed().as_secs_f64();
 
-    let hits = frame.masks.iter().filter(|&&m| m & MASK_SKY == 0).count() as f64;
-    for pass in ["primary", "shadow", "shade", "filter"] {
-        match frame.timed_ms("shadow-cpu").filter(|_| pass == "shadow") {
-            Some(ms) => println!("{pass:<9} {ms:>9.2} ms CPU (Embree)"),
-            None => println!("{pass:<9} {}", gpu_ms(frame.timed_ms(pass))),
+    let first = &frames[0];
+    let hits = first.masks.iter().filter(|&&m| m & MASK_SKY == 0).count() as f64;
+    let several = frames.len() > 1;
+    let sum_ms = |name: &str| -> Option<f64> {
+        let times: Vec<f64> = frames.iter().filter_map(|f| f.timed_ms(name)).collect();
+        (!times.is_empty()).then(|| times.iter().sum())
+    };
+    println!("{:<9} {}", "primary", gpu_ms(sum_ms("primary")));
+    for (i, frame) in frames.iter().enumerate() {
+        let light = if several {
+            format!(" (light {})", i + 1)
+        } else {
+            String::new()
+        };
+        for pass in ["shadow", "shade", "filter"] {
+            match frame.timed_ms("shadow-cpu").filter(|_| pass == "shadow") {
+                Some(ms) => println!("{pass:<9} {ms:>9.2} ms CPU (Embree){light}"),
+                None => println!("{pass:<9} {}{light}", gpu_ms(frame.timed_ms(pass))),
+            }
+        }
+        if args.refine {
+            let refined = frame.refined.iter().filter(|&&r| r).count();
+            println!(
+                "refine    {}: {refined} px ({:.1} % of those with geometry) traced all 256 rays{light}",
+                gpu_ms(frame.timed_ms("refine")),
+                100.0 * refined as f64 / hits.max(1.0)
+            );
         }
     }
-    if args.refine {
-        let refined = frame.refined.iter().filter(|&&r| r).count();
-        println!(
-            "refine    {}: {refined} px ({:.1} % of those with geometry) traced all 256 rays",
-            gpu_ms(frame.timed_ms("refine")),
-            100.0 * refined as f64 / hits.max(1.0)
-        );
-    }
-    let rate = match frame.timed_ms("shadow-cpu").or(frame.timed_ms("shadow")) {
-        Some(ms) if ms > 0.0 => format!("{:.2}", hits * rays_per_pixel / (ms * 1e3)),
+    let shadow_ms = sum_ms("shadow-cpu").or(sum_ms("shadow"));
+    let rays = hits * rays_per_pixel * frames.len() as f64;
+    let rate = match shadow_ms {
+        Some(ms) if ms > 0.0 => format!("{:.2}", rays / (ms * 1e3)),
         _ => "n/a".to_owned(),
     };
     println!(
-        "rays      {:.2} M shadow rays ({} px with geometry x {rays_per_pixel}), {rate} Mrays/s in the shadow pass",
-        hits * rays_per_pixel / 1e6,
+        "rays      {:.2} M shadow rays ({} px with geometry x {rays_per_pixel}{}), {rate} Mrays/s in the shadow pass{}",
+        rays / 1e6,
         hits,
+        if several {
+            format!(" x {} lights", frames.len())
+        } else {
+            String::new()
+        },
+        if several { "es" } else { "" }
     );
+    let dispatches: u32 = frames.iter().map(|f| f.shadow_stats.dispatches).sum();
+    let suspensions: u64 = frames.iter().map(|f| f.shadow_stats.suspensions).sum();
     println!(
-        "frame     {wall:.2} s wall (with readback); {} shadow dispatches, {} tile suspensions",
-        frame.shadow_stats.dispatches, frame.shadow_stats.suspensions
+        "frame     {wall:.2} s wall (with readback); {dispatches} shadow dispatches, {suspensions} tile suspensions"
     );
-    if frame.primary_fallback_pixels > 0 {
+    let fallback: u32 = frames.iter().map(|f| f.primary_fallback_pixels).sum();
+    if fallback > 0 {
         println!(
-            "note      the primary frusta of {} pixels ran out of loop iterations; the per-ray \
-             kernel traced the camera rays instead (its time is in the primary line)",
-            frame.primary_fallback_pixels
+            "note      the primary frusta of {fallback} pixels ran out of loop iterations; the per-ray \
+             kernel traced the camera rays instead (its time is in the primary line)"
         );
     }
 
     let image = HdrImage {
         width,
         height,
-        pixels: frame.image(&Ambient {
-            radiance: args.ambient,
-            background: args.background.0,
-        }),
+        pixels: image_of_lights(
+            &frames,
+            &Ambient {
+                radiance: args.ambient,
+                background: args.background.0,
+            },
+        ),
     };
     write_image(
         &args.output,
@@ -424,11 +469,19 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     )?;
     println!("wrote     {}", args.output.display());
     if args.aov == Some(AovArg::Visibility) {
-        for (name, values) in [
-            ("visibility", &frame.unfiltered),
-            ("visibility-filtered", &frame.filtered),
-        ] {
-            let path = aov_path(&args.output, name);
+        let aovs = frames.iter().enumerate().flat_map(|(i, frame)| {
+            let light = if several {
+                format!("light{}.", i + 1)
+            } else {
+                String::new()
+            };
+            [
+                (format!("{light}visibility"), &frame.unfiltered),
+                (format!("{light}visibility-filtered"), &frame.filtered),
+            ]
+        });
+        for (name, values) in aovs {
+            let path = aov_path(&args.output, &name);
             let image = FloatImage {
                 width,
                 height,

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use penumbra::scene::view::{QuadLight, View};
+use penumbra::scene::view::{QuadLight, View, ViewFile};
 use penumbra::{Result, assets, scene::Scene};
 
 /// Loads the scene the argument names: none → the built-in default scene; a
@@ -39,15 +39,46 @@ pub fn builtin_names() -> String {
         .join(", ")
 }
 
-/// The scene and view a command works on: the scene argument (see [`load_scene`]),
-/// the view file if given, else the built-in scene's view, else one made from the
-/// scene's bounds; with the view's ground plane added, both moved to the origin when the
-/// scene lies far from it ([`Scene::recentre`]; a note says so), and load warnings printed.
+/// The scene and view a one-light command works on ([`load_scene_and_views`]): a view file
+/// with several lights is an error; of a file's emissive quads, the most powerful lights it.
 pub fn load_scene_and_view(scene_arg: Option<&Path>, view_arg: Option<&Path>) -> Result<(Scene, View)> {
+    let (scene, file) = load(scene_arg, view_arg, Lights::One)?;
+    match file.views()[..] {
+        [view] => Ok((scene, view)),
+        ref views => Err(penumbra::Error::view(
+            view_arg.unwrap_or(Path::new("view")),
+            format!(
+                "has {} lights; this command traces one (penumbra render takes several)",
+                views.len()
+            ),
+        )),
+    }
+}
+
+/// The scene and view(s) a command works on: the scene argument (see [`load_scene`]), the
+/// view file if given, else the built-in scene's view, else a camera from the scene (its
+/// own, or one made from its bounds) with every emissive quad of the file as a light, or
+/// one light placed above the bounds when it has none; with the view's ground plane
+/// added, both moved to the origin when the scene lies far from it ([`Scene::recentre`];
+/// a note says so), and load warnings printed.
+pub fn load_scene_and_views(scene_arg: Option<&Path>, view_arg: Option<&Path>) -> Result<(Scene, ViewFile)> {
+    load(scene_arg, view_arg, Lights::All)
+}
+
+/// Which of a file's emissive quads light it when no view file is given.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Lights {
+    /// The most powerful.
+    One,
+    /// All of them.
+    All,
+}
+
+fn load(scene_arg: Option<&Path>, view_arg: Option<&Path>, lights: Lights) -> Result<(Scene, ViewFile)> {
     let mut scene = load_scene(scene_arg)?;
-    let view = match (view_arg, builtin_view(scene_arg)) {
-        (Some(path), _) => View::load(path)?,
-        (None, Some(view)) => view,
+    let file = match (view_arg, builtin_view(scene_arg)) {
+        (Some(path), _) => ViewFile::load(path)?,
+        (None, Some(view)) => ViewFile::from(view),
         (None, None) => {
             let mut view = View::default_for(&scene.bounds(), scene.camera);
             let emitters = file_lights(&scene);
@@ -61,44 +92,69 @@ pub fn load_scene_and_view(scene_arg: Option<&Path>, view_arg: Option<&Path>) ->
                     format!("the default view for this scene is unusable ({m}); give one with --view"),
                 )
             })?;
-            let l = &view.light;
-            let centre = fmt_point(l.corner + 0.5 * (l.edge_u + l.edge_v));
-            let (u, v) = (l.edge_u.length(), l.edge_v.length());
             let source = scene.source.display();
             let camera = if scene.camera.is_some() {
                 "the file's camera"
             } else {
                 "a camera looking at the bounds"
             };
-            match emitters.lights.len() {
-                0 => eprintln!(
-                    "note: {source}: no view file, so a {u:.3} × {v:.3} quad light facing down is placed \
-                     at {centre} (a quarter of the bounds' diagonal above them), with {camera}; give your \
-                     own with --view"
-                ),
-                n => eprintln!(
-                    "note: {source}: no view file: lit by the file's emissive quad at {centre} ({u:.3} × \
-                     {v:.3}, radiance {}){}, with {camera}",
-                    fmt_point(l.color * l.intensity),
-                    if n == 1 {
-                        String::new()
-                    } else {
-                        format!(", the most powerful of the {n} the file has (one light per view for now)")
+            let describe = |l: &QuadLight| {
+                let centre = fmt_point(l.corner + 0.5 * (l.edge_u + l.edge_v));
+                let (u, v) = (l.edge_u.length(), l.edge_v.length());
+                (centre, u, v)
+            };
+            let mut file = ViewFile::from(view);
+            match (emitters.lights.len(), lights) {
+                (0, _) => {
+                    let (centre, u, v) = describe(&view.light);
+                    eprintln!(
+                        "note: {source}: no view file, so a {u:.3} × {v:.3} quad light facing down is \
+                         placed at {centre} (a quarter of the bounds' diagonal above them), with \
+                         {camera}; give your own with --view"
+                    );
+                }
+                (1, _) | (_, Lights::One) => {
+                    let l = &view.light;
+                    let (centre, u, v) = describe(l);
+                    let n = emitters.lights.len();
+                    eprintln!(
+                        "note: {source}: no view file: lit by the file's emissive quad at {centre} \
+                         ({u:.3} × {v:.3}, radiance {}){}, with {camera}",
+                        fmt_point(l.color * l.intensity),
+                        if n == 1 {
+                            String::new()
+                        } else {
+                            format!(", the most powerful of the {n} the file has (this command traces one)")
+                        }
+                    );
+                }
+                (n, Lights::All) => {
+                    eprintln!(
+                        "note: {source}: no view file: lit by the file's {n} emissive quads, with {camera}:"
+                    );
+                    for l in &emitters.lights {
+                        let (centre, u, v) = describe(l);
+                        eprintln!(
+                            "note:   {u:.3} × {v:.3} at {centre}, radiance {}",
+                            fmt_point(l.color * l.intensity)
+                        );
                     }
-                ),
+                    file.lights = emitters.lights.clone();
+                }
             }
             for why in &emitters.unusable {
                 eprintln!("warning: {source}: emissive geometry of {why}");
             }
-            view
+            file
         }
     };
-    let mut view = view;
-    if let Some(y) = view.ground_y {
+    let mut file = file;
+    if let Some(y) = file.ground_y {
         scene.add_ground_plane(y);
     }
-    let shift = recentre(&mut scene, &mut view);
+    let shift = scene.recentre();
     if shift != glam::Vec3::ZERO {
+        file = file.translated(-shift);
         eprintln!(
             "note: {}: the scene lies {:.0} from the origin; it is traced moved by {:?} so that \
              f32 keeps its precision (images are the same as seen from the view)",
@@ -110,7 +166,7 @@ pub fn load_scene_and_view(scene_arg: Option<&Path>, view_arg: Option<&Path>) ->
     for w in scene.warnings.messages() {
         eprintln!("warning: {}: {w}", scene.source.display());
     }
-    Ok((scene, view))
+    Ok((scene, file))
 }
 
 /// The quad lights of the file's emissive parallelograms, each a ray offset in front of

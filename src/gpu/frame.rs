@@ -87,19 +87,7 @@ impl Frame {
     /// that radiance: a surface reflects albedo × it), `ambient.background` where it
     /// does not. With [`Ambient::NONE`] this is [`Frame::radiance`].
     pub fn image(&self, ambient: &Ambient) -> Vec<[f32; 3]> {
-        let sky = std::f32::consts::PI * ambient.radiance;
-        self.brdf
-            .iter()
-            .zip(&self.filtered)
-            .zip(&self.masks)
-            .map(|((b, e), &m)| {
-                if m & MASK_SKY != 0 {
-                    ambient.background
-                } else {
-                    [b[0] * (e[0] + sky), b[1] * (e[1] + sky), b[2] * (e[2] + sky)]
-                }
-            })
-            .collect()
+        image_of_lights(std::slice::from_ref(self), ambient)
     }
 
     /// GPU milliseconds of the pass `name`, summed over its dispatches (0 when not timed).
@@ -114,6 +102,36 @@ impl Frame {
         times.peek()?;
         Some(times.map(|(_, ms)| ms).sum())
     }
+}
+
+/// The image of several lights ([`super::Renderer::render_lights`]: one frame per light,
+/// one G-buffer): BRDF × (the sum of the lights' filtered irradiance + π ·
+/// `ambient.radiance`) where the pixel sees geometry, `ambient.background` where it does
+/// not; the ambient counts once. For one frame this is [`Frame::image`].
+///
+/// Panics when `frames` is empty or the frames differ in size (a bug of the caller's).
+pub fn image_of_lights(frames: &[Frame], ambient: &Ambient) -> Vec<[f32; 3]> {
+    let first = &frames[0];
+    assert!(
+        frames.iter().all(|f| f.filtered.len() == first.filtered.len()),
+        "image_of_lights: frames of different sizes"
+    );
+    let sky = std::f32::consts::PI * ambient.radiance;
+    (0..first.brdf.len())
+        .map(|i| {
+            if first.masks[i] & MASK_SKY != 0 {
+                return ambient.background;
+            }
+            let mut e = [0.0f32; 3];
+            for f in frames {
+                for (c, v) in e.iter_mut().zip(&f.filtered[i]) {
+                    *c += v;
+                }
+            }
+            let b = first.brdf[i];
+            [b[0] * (e[0] + sky), b[1] * (e[1] + sky), b[2] * (e[2] + sky)]
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -150,6 +168,28 @@ mod tests {
         let sky = std::f32::consts::PI * 0.5;
         assert_eq!(img[0], [0.2 * (0.5 + sky), 0.1 * (1.0 + sky), 0.3 * (2.0 + sky)]);
         assert_eq!(img[1], [0.1, 0.2, 0.3]);
+    }
+
+    #[test]
+    fn the_image_of_two_lights_sums_their_irradiance_and_adds_ambient_once() {
+        let a = frame();
+        let mut b = frame();
+        b.filtered[0] = [0.25, 0.5, 0.125, 0.75];
+        let ambient = Ambient {
+            radiance: 0.5,
+            background: [0.1, 0.2, 0.3],
+        };
+        let img = image_of_lights(&[a.clone(), b], &ambient);
+        let sky = std::f32::consts::PI * 0.5;
+        // Sums of dyadic fractions: exact in f32.
+        assert_eq!(img[0][0], 0.2 * (0.75 + sky));
+        assert_eq!(img[0][1], 0.1 * (1.5 + sky));
+        assert_eq!(img[0][2], 0.3 * (2.125 + sky));
+        assert_eq!(img[1], [0.1, 0.2, 0.3]);
+        assert_eq!(
+            image_of_lights(std::slice::from_ref(&a), &ambient),
+            a.image(&ambient)
+        );
     }
 
     #[test]

@@ -37,7 +37,7 @@ pub use context::{
     set_driver_defaults, set_driver_defaults_for_drawing,
 };
 pub use embed::{ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, SurfaceInput, VISIBILITY_FORMAT};
-pub use frame::{Ambient, Frame};
+pub use frame::{Ambient, Frame, image_of_lights};
 pub use motion::{MotionSettings, MotionUpdate};
 pub use pixel_buffers::{PIXEL_BUFFERS, PixelBuffer, PixelBuffers};
 pub use primary_pass::{PrimaryOptions, PrimaryPass, PrimaryStatus, PrimaryTracer};

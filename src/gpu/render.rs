@@ -130,7 +130,41 @@ impl Renderer {
         settings: &FrameSettings,
         progress: &mut dyn FnMut(Phase, u64, u64),
     ) -> Result<Frame> {
-        self.render_frame(ctx, scene, view, settings, None, progress)
+        let frames = self.render_frame(ctx, scene, std::slice::from_ref(view), settings, None, progress)?;
+        Ok(frames.into_iter().next().expect("one frame per view"))
+    }
+
+    /// One frame per light: `views` share one camera and ground plane and differ in their
+    /// light (as [`crate::scene::view::ViewFile::views`] makes them). The primary pass runs
+    /// once, and its G-buffer serves every light's shadow pass, shading, filter and
+    /// refinement; frame `i` holds light `i`'s results, and the primary pass's time is in
+    /// the first frame's timings. The image of all lights together is
+    /// [`super::image_of_lights`]. `progress` as in [`Renderer::render_with_progress`],
+    /// restarting for each light.
+    pub fn render_lights(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        views: &[View],
+        settings: &FrameSettings,
+        progress: &mut dyn FnMut(Phase, u64, u64),
+    ) -> Result<Vec<Frame>> {
+        let Some(first) = views.first() else {
+            return Err(Error::invalid(
+                "Renderer::render_lights",
+                "no view: give at least one light",
+            ));
+        };
+        if views
+            .iter()
+            .any(|v| v.camera != first.camera || v.ground_y != first.ground_y)
+        {
+            return Err(Error::invalid(
+                "Renderer::render_lights",
+                "the views differ in more than their light: one camera for all lights",
+            ));
+        }
+        self.render_frame(ctx, scene, views, settings, None, progress)
     }
 
     /// [`Renderer::render_with_progress`] with the shadow masks made on the CPU by
@@ -149,18 +183,28 @@ impl Renderer {
         shadows: &CpuShadows<'_>,
         progress: &mut dyn FnMut(Phase, u64, u64),
     ) -> Result<Frame> {
-        self.render_frame(ctx, scene, view, settings, Some(shadows), progress)
+        let frames = self.render_frame(
+            ctx,
+            scene,
+            std::slice::from_ref(view),
+            settings,
+            Some(shadows),
+            progress,
+        )?;
+        Ok(frames.into_iter().next().expect("one frame per view"))
     }
 
+    /// One frame per view (the views share their camera; `cpu_shadows` only with one view).
     fn render_frame(
         &self,
         ctx: &GpuContext,
         scene: &GpuScene,
-        view: &View,
+        views: &[View],
         settings: &FrameSettings,
         cpu_shadows: Option<&CpuShadows<'_>>,
         progress: &mut dyn FnMut(Phase, u64, u64),
-    ) -> Result<Frame> {
+    ) -> Result<Vec<Frame>> {
+        debug_assert!(cpu_shadows.is_none() || views.len() == 1);
         let (w, h) = (settings.width, settings.height);
         if w == 0 || h == 0 {
             return Err(Error::value(
@@ -169,16 +213,17 @@ impl Renderer {
                 "both sides must be at least 1",
             ));
         }
-        view.validate()
-            .map_err(|message| Error::invalid("Renderer::render view", message))?;
+        for view in views {
+            view.validate()
+                .map_err(|message| Error::invalid("Renderer::render view", message))?;
+        }
         // The kernels work relative to the scene's origin (GpuScene::origin).
-        let moved;
-        let view = if scene.origin == Vec3::ZERO {
-            view
+        let views: Vec<View> = if scene.origin == Vec3::ZERO {
+            views.to_vec()
         } else {
-            moved = view.translated(-scene.origin);
-            &moved
+            views.iter().map(|v| v.translated(-scene.origin)).collect()
         };
+        let view = &views[0];
         if settings.refine && settings.filter.is_none() {
             return Err(Error::invalid(
                 "FrameSettings::refine",
@@ -203,14 +248,14 @@ impl Renderer {
             .max_tile
             .unwrap_or_else(|| tile_side(ctx.info.max_storage_buffer_binding_size));
         if w <= side && h <= side {
-            return self.render_tile(ctx, scene, view, settings, &whole, cpu_shadows, progress);
+            return self.render_tile(ctx, scene, &views, settings, &whole, cpu_shadows, progress);
         }
         let regions = tile_regions(w, h, side);
         let unit = self.tracer().unit();
         let units = |r: &TileRegion| u64::from(r.w.div_ceil(unit)) * u64::from(r.h.div_ceil(unit));
         let total: u64 = regions.iter().map(units).sum();
         let mut done = 0u64;
-        let mut out: Option<Frame> = None;
+        let mut out: Vec<Frame> = Vec::new();
         for r in &regions {
             let tile_settings = FrameSettings {
                 width: r.w,
@@ -218,10 +263,10 @@ impl Renderer {
                 ..*settings
             };
             let camera = tile_camera(&whole, r.x, r.y, r.w, r.h);
-            let tile = self.render_tile(
+            let tiles = self.render_tile(
                 ctx,
                 scene,
-                view,
+                &views,
                 &tile_settings,
                 &camera,
                 cpu_shadows,
@@ -231,34 +276,34 @@ impl Renderer {
                 },
             )?;
             done += units(r);
-            let frame = out.get_or_insert_with(|| Frame::empty(w, h, settings.keep_gbuffer));
-            frame.paste(&tile, r);
+            out.resize_with(tiles.len(), || Frame::empty(w, h, settings.keep_gbuffer));
+            for (frame, tile) in out.iter_mut().zip(&tiles) {
+                frame.paste(tile, r);
+            }
         }
-        Ok(out.expect("an image has at least one tile"))
+        Ok(out)
     }
 
-    /// One frame (or tile) of the image `camera` projects, `settings`-sized.
+    /// One frame (or tile) of the image `camera` projects, `settings`-sized, per view (the
+    /// views differ only in their light): one primary pass, then each light's stages.
     #[allow(clippy::too_many_arguments)]
     fn render_tile(
         &self,
         ctx: &GpuContext,
         scene: &GpuScene,
-        view: &View,
+        views: &[View],
         settings: &FrameSettings,
         camera: &CameraParams,
         cpu_shadows: Option<&CpuShadows<'_>>,
         progress: &mut dyn FnMut(Phase, u64, u64),
-    ) -> Result<Frame> {
+    ) -> Result<Vec<Frame>> {
         let (w, h) = (settings.width, settings.height);
         // Tiles are sized to fit; this catches a forced `max_tile` that does not.
         super::memory::check_frame_fits(super::memory::storage_limit(ctx), w, h)?;
-        let pixel_count = u64::from(w) * u64::from(h);
         let pixels = PixelBuffers::new(ctx, w, h, true)?;
         let status = PrimaryPass::status_buffer(&ctx.device);
-        let light_points = self.stages.tracer.light_points_buffer(&ctx.device, &view.light);
 
         let camera_buf = uniform_buffer(ctx, "camera", camera);
-        let shade_buf = uniform_buffer(ctx, "shade params", &shade_params(&view.light, w, h));
         let mut timer = GpuTimer::new(ctx, TIMER_CAPACITY);
         let groups = (w.div_ceil(PIXEL_GROUP), h.div_ceil(PIXEL_GROUP));
         check_groups(ctx, groups)?;
@@ -294,7 +339,51 @@ impl Renderer {
             primary_status = trace_primary(fallback)?;
         }
         let primary_counters = primary_status.check()?.unwrap_or_default();
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        timer.resolve(&mut encoder);
+        ctx.queue.submit([encoder.finish()]);
+        let primary_timings = timer.read(ctx)?;
 
+        let mut frames = Vec::with_capacity(views.len());
+        for view in views {
+            let mut frame = self.light_stages(
+                ctx,
+                scene,
+                view,
+                settings,
+                &pixels,
+                &mut timer,
+                cpu_shadows,
+                progress,
+            )?;
+            if frames.is_empty() {
+                frame.timings.splice(0..0, primary_timings.iter().cloned());
+                frame.primary_counters = primary_counters;
+                frame.primary_fallback_pixels = primary_fallback_pixels;
+            }
+            frames.push(frame);
+        }
+        Ok(frames)
+    }
+
+    /// One light's stages over the G-buffer in `pixels` (shadow pass, shading, filter,
+    /// refinement), read back as its frame (without the primary pass's figures).
+    #[allow(clippy::too_many_arguments)]
+    fn light_stages(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        view: &View,
+        settings: &FrameSettings,
+        pixels: &PixelBuffers,
+        timer: &mut GpuTimer,
+        cpu_shadows: Option<&CpuShadows<'_>>,
+        progress: &mut dyn FnMut(Phase, u64, u64),
+    ) -> Result<Frame> {
+        let (w, h) = (settings.width, settings.height);
+        let pixel_count = u64::from(w) * u64::from(h);
+        let light_points = self.stages.tracer.light_points_buffer(&ctx.device, &view.light);
+        let shade_buf = uniform_buffer(ctx, "shade params", &shade_params(&view.light, w, h));
         let shadow = shadow_params(&view.light, w, h);
         let image = ShadowImage {
             gbuffer: &pixels.gbuffer,
@@ -308,7 +397,7 @@ impl Renderer {
                 scene,
                 &image,
                 &shadow,
-                Some(&mut timer),
+                Some(&mut *timer),
                 "shadow",
                 &mut |done, total| progress(Phase::Shadow, done, total),
             )?,
@@ -340,10 +429,10 @@ impl Renderer {
         self.stages.record_visibility_and_filter(
             &ctx.device,
             &mut encoder,
-            &pixels,
+            pixels,
             &shade_buf,
             filter.as_ref(),
-            Some(&mut timer),
+            Some(&mut *timer),
         )?;
         ctx.queue.submit([encoder.finish()]);
 
@@ -354,12 +443,12 @@ impl Renderer {
             for p in self.stages.refine(
                 ctx,
                 scene,
-                &pixels,
+                pixels,
                 &light_points,
                 &shadow,
                 &shade_buf,
                 &filter,
-                &mut timer,
+                timer,
                 &mut refine_progress,
             )? {
                 refined[p as usize] = true;
@@ -404,8 +493,8 @@ impl Renderer {
                 t
             },
             shadow_stats,
-            primary_counters,
-            primary_fallback_pixels,
+            primary_counters: Default::default(),
+            primary_fallback_pixels: 0,
         })
     }
 }

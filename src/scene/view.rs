@@ -12,6 +12,10 @@
 //! It emits to the side `cross(edge_u, edge_v)` points to (one-sided), with
 //! radiance `color × intensity`. `up` defaults to +y, `color` to white and
 //! `intensity` to 1.
+//!
+//! A file may give several lights instead, as `"lights": [ {…}, {…} ]` (not both
+//! `light` and `lights`): [`ViewFile`] reads either form, `penumbra render` traces each
+//! light's shadows and sums their light; a [`View`] is the camera with one of them.
 
 use std::path::Path;
 
@@ -97,6 +101,14 @@ impl QuadLight {
         }
     }
 
+    /// The same light moved by `offset`.
+    pub fn translated(&self, offset: Vec3) -> QuadLight {
+        QuadLight {
+            corner: self.corner + offset,
+            ..*self
+        }
+    }
+
     /// Centre of the parallelogram.
     pub fn center(&self) -> Vec3 {
         self.corner + 0.5 * (self.edge_u + self.edge_v)
@@ -108,15 +120,117 @@ impl QuadLight {
     }
 }
 
+/// What a view file describes: a camera, one or more quad lights, and an optional ground
+/// plane (see the module's documentation for the format).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ViewFile {
+    /// Where the image is seen from.
+    pub camera: Camera,
+    /// The area lights, at least one.
+    pub lights: Vec<QuadLight>,
+    /// As [`View::ground_y`].
+    pub ground_y: Option<f32>,
+}
+
+/// A view file as written: one `light` or a list of `lights`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ViewFileJson {
+    camera: Camera,
+    #[serde(default)]
+    light: Option<QuadLight>,
+    #[serde(default)]
+    lights: Option<Vec<QuadLight>>,
+    #[serde(default)]
+    ground_y: Option<f32>,
+}
+
+impl ViewFile {
+    /// Parses a view file with one light or several; `path` is only used in error messages.
+    /// Errors name the file and the field at fault, e.g. `lights[1]: light has zero area …`.
+    pub fn from_json(text: &str, path: &Path) -> Result<ViewFile> {
+        let json: ViewFileJson = serde_json::from_str(text).map_err(|e| Error::view(path, e.to_string()))?;
+        let lights = match (json.light, json.lights) {
+            (Some(_), Some(_)) => {
+                return Err(Error::view(
+                    path,
+                    "has both \"light\" and \"lights\"; give one light or a list of lights",
+                ));
+            }
+            (None, None) => {
+                return Err(Error::view(
+                    path,
+                    "has no light: give \"light\": {…} or \"lights\": [{…}, …]",
+                ));
+            }
+            (None, Some(lights)) if lights.is_empty() => {
+                return Err(Error::view(path, "\"lights\" is empty: give at least one light"));
+            }
+            (Some(light), None) => vec![light],
+            (None, Some(lights)) => lights,
+        };
+        let file = ViewFile {
+            camera: json.camera,
+            lights,
+            ground_y: json.ground_y,
+        };
+        for (i, view) in file.views().iter().enumerate() {
+            view.validate().map_err(|m| match file.lights.len() {
+                1 => Error::view(path, m),
+                _ => Error::view(path, format!("lights[{i}]: {m}")),
+            })?;
+        }
+        Ok(file)
+    }
+
+    /// Reads and parses a view file.
+    pub fn load(path: &Path) -> Result<ViewFile> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        ViewFile::from_json(&text, path)
+    }
+
+    /// The same camera and lights moved by `offset` (see [`View::translated`]).
+    pub fn translated(&self, offset: Vec3) -> ViewFile {
+        ViewFile {
+            camera: self.camera.translated(offset),
+            lights: self.lights.iter().map(|l| l.translated(offset)).collect(),
+            ground_y: self.ground_y.map(|y| y + offset.y),
+        }
+    }
+
+    /// The camera with each light in turn: one [`View`] per light, in the file's order.
+    pub fn views(&self) -> Vec<View> {
+        self.lights
+            .iter()
+            .map(|&light| View {
+                camera: self.camera,
+                light,
+                ground_y: self.ground_y,
+            })
+            .collect()
+    }
+}
+
+impl From<View> for ViewFile {
+    /// A file with the view's one light.
+    fn from(view: View) -> ViewFile {
+        ViewFile {
+            camera: view.camera,
+            lights: vec![view.light],
+            ground_y: view.ground_y,
+        }
+    }
+}
+
 impl View {
     /// The same camera and light moved by `offset` (see [`crate::scene::Scene::translate`]).
     pub fn translated(&self, offset: Vec3) -> View {
         View {
             camera: self.camera.translated(offset),
-            light: QuadLight {
-                corner: self.light.corner + offset,
-                ..self.light
-            },
+            light: self.light.translated(offset),
             ground_y: self.ground_y.map(|y| y + offset.y),
         }
     }
@@ -149,11 +263,20 @@ impl View {
         }
     }
 
-    /// Parses a view from JSON text; `path` is only used in error messages.
+    /// Parses a view file with one light ([`ViewFile::from_json`]; a file with several is
+    /// an error that says `penumbra render` takes them); `path` is only used in error messages.
     pub fn from_json(text: &str, path: &Path) -> Result<View> {
-        let view: View = serde_json::from_str(text).map_err(|e| Error::view(path, e.to_string()))?;
-        view.validate().map_err(|m| Error::view(path, m))?;
-        Ok(view)
+        let file = ViewFile::from_json(text, path)?;
+        match file.views()[..] {
+            [view] => Ok(view),
+            ref views => Err(Error::view(
+                path,
+                format!(
+                    "has {} lights; this traces one (penumbra render takes several)",
+                    views.len()
+                ),
+            )),
+        }
     }
 
     /// Reads and parses a view file.

@@ -134,6 +134,28 @@ fn bad_views_are_one_line_naming_the_file_and_field() {
                 .to_owned(),
             "camera.eye [0, inf, 9] is not finite",
         ),
+        (
+            "no_lights.json",
+            format!(r#"{{{camera}, "lights": []}}"#),
+            r#""lights" is empty: give at least one light"#,
+        ),
+        (
+            "light_and_lights.json",
+            format!(
+                r#"{{{camera}, "light": {{"corner": [0, 9, 0], "edge_u": [1, 0, 0], "edge_v": [0, 0, -1]}},
+                    "lights": [{{"corner": [0, 9, 0], "edge_u": [1, 0, 0], "edge_v": [0, 0, -1]}}]}}"#
+            ),
+            r#"has both "light" and "lights"; give one light or a list of lights"#,
+        ),
+        (
+            "flat_second_light.json",
+            format!(
+                r#"{{{camera}, "lights": [{{"corner": [0, 9, 0], "edge_u": [1, 0, 0], "edge_v": [0, 0, -1]}},
+                    {{"corner": [0, 9, 0], "edge_u": [1, 0, 0], "edge_v": [3, 0, 0]}}]}}"#
+            ),
+            "lights[1]: light has zero area: |edge_u × edge_v| = 0 (edge_u [1, 0, 0] and edge_v [3, 0, 0] \
+             are zero, parallel or too short)",
+        ),
     ] {
         let path = dir.join(name);
         std::fs::write(&path, json).unwrap();

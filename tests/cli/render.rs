@@ -610,3 +610,73 @@ fn the_cornell_box_without_a_view_is_lit_by_its_luminaire() {
         .count();
     assert_eq!(differing, 0, "pixels whose rays the luminaire blocks");
 }
+
+/// A view file with two lights: `render` traces both (its report names each), writes one
+/// pair of visibility AOVs per light, and its image is the sum of the two one-light images
+/// (no ambient, black background), within the rounding bound that tests/gpu/lights.rs
+/// derives (the EXR holds the f32 values).
+#[test]
+fn a_view_with_two_lights_renders_the_sum_of_its_lights() {
+    use penumbra::scene::view::{QuadLight, View};
+    let dir = out_dir("two-lights");
+    let view = assets::default_scene().view();
+    let second = QuadLight {
+        corner: glam::Vec3::new(2.0, 5.0, -3.0),
+        edge_u: glam::Vec3::new(1.0, 0.0, 0.0),
+        edge_v: glam::Vec3::new(0.0, 0.0, 1.5),
+        color: glam::Vec3::new(1.0, 0.6, 0.3),
+        intensity: 20.0,
+    };
+    let both = serde_json::json!({ "camera": view.camera, "lights": [view.light, second] });
+    std::fs::write(dir.join("both.json"), both.to_string()).unwrap();
+    std::fs::write(dir.join("one.json"), view.to_json()).unwrap();
+    std::fs::write(
+        dir.join("two.json"),
+        View {
+            light: second,
+            ..view
+        }
+        .to_json(),
+    )
+    .unwrap();
+    let render = |name: &str| {
+        let (json, exr) = (format!("{name}.json"), format!("{name}.exr"));
+        let args = ["render", "--view", &json, "--size", "48x32", "--ambient", "0"];
+        penumbra(
+            &dir,
+            &[
+                &args[..],
+                &["--background", "0,0,0", "--aov", "visibility", "-o", &exr],
+            ]
+            .concat(),
+        )
+    };
+    let stdout = render("both");
+    for line in ["shadow", "(light 1)", "(light 2)", "x 2 lights"] {
+        assert!(stdout.contains(line), "no '{line}' in:\n{stdout}");
+    }
+    for aov in ["light1.visibility", "light2.visibility-filtered"] {
+        assert!(dir.join(format!("both.{aov}.exr")).exists(), "no both.{aov}.exr");
+    }
+    render("one");
+    render("two");
+    let [s, a, b] = ["both", "one", "two"].map(|n| read_hdr_image(&dir.join(format!("{n}.exr"))).unwrap());
+    let mut lit_by_second = 0;
+    for ((s, a), b) in s.pixels.iter().zip(&a.pixels).zip(&b.pixels) {
+        for c in 0..3 {
+            let bound = 2.0 * f32::EPSILON * (a[c].abs() + b[c].abs());
+            assert!(
+                (s[c] - (a[c] + b[c])).abs() <= bound,
+                "{} against {} + {}",
+                s[c],
+                a[c],
+                b[c]
+            );
+        }
+        lit_by_second += usize::from(b[0] > 0.0);
+    }
+    assert!(
+        lit_by_second * 10 > s.pixels.len(),
+        "the second light lights {lit_by_second} pixels"
+    );
+}

@@ -8,7 +8,7 @@ use glam::{Vec2, Vec3};
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::pass_inputs::camera_params;
 use penumbra::reference::shade::shade_params;
-use penumbra::scene::view::{Camera, QuadLight, View};
+use penumbra::scene::view::{Camera, QuadLight, View, ViewFile};
 use penumbra::scene::view_checks::{ViewWarning, view_warnings};
 use penumbra::scene::{Instance, LoadWarnings, Material, Scene, SceneTriangle};
 use penumbra::{Error, sampling};
@@ -198,7 +198,7 @@ fn json_problems_name_the_file() {
         ("{", "EOF while parsing an object at line 1 column 1"),
         (
             r#"{"camera": {"eye": [0, 0, 1], "target": [0, 0, 0], "fov_y_degrees": 45}}"#,
-            "missing field `light` at line 1 column 72",
+            r#"has no light: give "light": {…} or "lights": [{…}, …]"#,
         ),
         (
             r#"{"camera": {"eye": [0, 0, 1], "target": [0, 0, 0], "fov": 45}}"#,
@@ -215,6 +215,41 @@ fn json_problems_name_the_file() {
     assert_eq!(
         View::load(&missing).unwrap_err().to_string(),
         format!("{}: {io}", missing.display())
+    );
+}
+
+/// A view file may list several lights: each becomes a view with the same camera, in the
+/// file's order; a one-light reader (View::from_json) refuses such a file by name.
+#[test]
+fn several_lights_give_one_view_each_and_one_light_readers_refuse_them() {
+    let text = r#"{"camera": {"eye": [0, 0, 5], "target": [0, 0, 0], "fov_y_degrees": 45},
+        "lights": [{"corner": [0, 3, 0], "edge_u": [1, 0, 0], "edge_v": [0, 0, -1]},
+                   {"corner": [2, 3, 0], "edge_u": [0.5, 0, 0], "edge_v": [0, 0, -0.5], "intensity": 4}],
+        "ground_y": -1}"#;
+    let file = ViewFile::from_json(text, Path::new("two.json")).unwrap();
+    let views = file.views();
+    assert_eq!(views.len(), 2);
+    assert_eq!(views[0].light.corner, Vec3::new(0.0, 3.0, 0.0));
+    assert_eq!(views[1].light.intensity, 4.0);
+    assert!(
+        views
+            .iter()
+            .all(|v| v.camera == file.camera && v.ground_y == Some(-1.0))
+    );
+    assert_eq!(
+        View::from_json(text, Path::new("two.json"))
+            .unwrap_err()
+            .to_string(),
+        "two.json: has 2 lights; this traces one (penumbra render takes several)"
+    );
+    // One light, in either form, is the same view.
+    let single = r#"{"camera": {"eye": [0, 0, 5], "target": [0, 0, 0], "fov_y_degrees": 45},
+        "light": {"corner": [0, 3, 0], "edge_u": [1, 0, 0], "edge_v": [0, 0, -1]}}"#;
+    let listed = r#"{"camera": {"eye": [0, 0, 5], "target": [0, 0, 0], "fov_y_degrees": 45},
+        "lights": [{"corner": [0, 3, 0], "edge_u": [1, 0, 0], "edge_v": [0, 0, -1]}]}"#;
+    assert_eq!(
+        View::from_json(single, Path::new("a")).unwrap(),
+        View::from_json(listed, Path::new("b")).unwrap()
     );
 }
 

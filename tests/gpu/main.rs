@@ -7,6 +7,7 @@ mod determinism;
 mod embed;
 mod far_from_origin;
 mod frame;
+mod lights;
 mod loop_limit;
 mod motion;
 mod peers;
