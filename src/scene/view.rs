@@ -185,11 +185,7 @@ impl ViewFile {
 
     /// Reads and parses a view file.
     pub fn load(path: &Path) -> Result<ViewFile> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        ViewFile::from_json(&text, path)
+        ViewFile::from_json(&read_text(path)?, path)
     }
 
     /// The same camera and lights moved by `offset` (see [`View::translated`]).
@@ -279,13 +275,9 @@ impl View {
         }
     }
 
-    /// Reads and parses a view file.
+    /// Reads and parses a view file with one light.
     pub fn load(path: &Path) -> Result<View> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        View::from_json(&text, path)
+        View::from_json(&read_text(path)?, path)
     }
 
     /// The view as pretty JSON, in the format [`View::from_json`] reads.
@@ -456,6 +448,14 @@ impl QuadLight {
         }
         Ok(())
     }
+}
+
+/// The text of the file at `path`, or an I/O error naming it.
+fn read_text(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.to_owned(),
+        source,
+    })
 }
 
 /// An error naming the first of `fields` that has a NaN or infinite component.

@@ -613,8 +613,8 @@ fn the_cornell_box_without_a_view_is_lit_by_its_luminaire() {
 
 /// A view file with two lights: `render` traces both (its report names each), writes one
 /// pair of visibility AOVs per light, and its image is the sum of the two one-light images
-/// (no ambient, black background), within the rounding bound that tests/gpu/lights.rs
-/// derives (the EXR holds the f32 values).
+/// (no ambient, black background), within the rounding bound of
+/// `support::assert_image_is_sum` (the EXR holds the f32 values).
 #[test]
 fn a_view_with_two_lights_renders_the_sum_of_its_lights() {
     use penumbra::scene::view::{QuadLight, View};
@@ -661,20 +661,7 @@ fn a_view_with_two_lights_renders_the_sum_of_its_lights() {
     render("one");
     render("two");
     let [s, a, b] = ["both", "one", "two"].map(|n| read_hdr_image(&dir.join(format!("{n}.exr"))).unwrap());
-    let mut lit_by_second = 0;
-    for ((s, a), b) in s.pixels.iter().zip(&a.pixels).zip(&b.pixels) {
-        for c in 0..3 {
-            let bound = 2.0 * f32::EPSILON * (a[c].abs() + b[c].abs());
-            assert!(
-                (s[c] - (a[c] + b[c])).abs() <= bound,
-                "{} against {} + {}",
-                s[c],
-                a[c],
-                b[c]
-            );
-        }
-        lit_by_second += usize::from(b[0] > 0.0);
-    }
+    let lit_by_second = crate::support::assert_image_is_sum(&s.pixels, &a.pixels, &b.pixels, "two lights");
     assert!(
         lit_by_second * 10 > s.pixels.len(),
         "the second light lights {lit_by_second} pixels"

@@ -52,23 +52,7 @@ fn two_lights_give_the_sum_of_two_one_light_renders() {
 
         let both = image_of_lights(&frames, &Ambient::NONE);
         let [a, b] = alone.map(|f| f.image(&Ambient::NONE));
-        let mut lit_by_second = 0;
-        for ((s, a), b) in both.iter().zip(&a).zip(&b) {
-            for c in 0..3 {
-                // brdf·(e1 + e2) against brdf·e1 + brdf·e2: three roundings to nearest
-                // against three, each within 2^-24 of its result, so they differ by less
-                // than 3 · 2^-24 · (|brdf·e1| + |brdf·e2|) < 2 ε (|a| + |b|).
-                let bound = 2.0 * f32::EPSILON * (a[c].abs() + b[c].abs());
-                assert!(
-                    (s[c] - (a[c] + b[c])).abs() <= bound,
-                    "{variant}: {} against {} + {}",
-                    s[c],
-                    a[c],
-                    b[c]
-                );
-            }
-            lit_by_second += usize::from(b[0] > 0.0);
-        }
+        let lit_by_second = support::assert_image_is_sum(&both, &a, &b, &variant.to_string());
         assert!(
             lit_by_second * 10 > both.len(),
             "{variant}: the second light lights only {lit_by_second} pixels"

@@ -579,3 +579,29 @@ pub fn rays_through_a_shared_edge() -> (
         .collect();
     (scene, view, texels, w, h)
 }
+
+/// Asserts that the image `sum` of two lights is `a + b`, the images of each alone, per
+/// channel: `brdf·(e1 + e2)` against `brdf·e1 + brdf·e2` is three roundings to nearest
+/// against three, each within 2^-24 of its result, so they differ by less than
+/// 3 · 2^-24 · (|brdf·e1| + |brdf·e2|) < 2 ε (|a| + |b|). Returns how many pixels `b` lights.
+pub fn assert_image_is_sum(sum: &[[f32; 3]], a: &[[f32; 3]], b: &[[f32; 3]], label: &str) -> usize {
+    assert!(
+        sum.len() == a.len() && a.len() == b.len(),
+        "{label}: image sizes differ"
+    );
+    let mut lit_by_b = 0;
+    for ((s, a), b) in sum.iter().zip(a).zip(b) {
+        for c in 0..3 {
+            let bound = 2.0 * f32::EPSILON * (a[c].abs() + b[c].abs());
+            assert!(
+                (s[c] - (a[c] + b[c])).abs() <= bound,
+                "{label}: {} against {} + {}",
+                s[c],
+                a[c],
+                b[c]
+            );
+        }
+        lit_by_b += usize::from(b[0] > 0.0);
+    }
+    lit_by_b
+}
