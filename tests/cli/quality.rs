@@ -193,3 +193,46 @@ fn bench_prints_the_table_and_its_json() {
             > 1.0
     );
 }
+
+/// A view file with two lights benches each light as its own case (`FILE, light N`), each
+/// with its own timings.
+#[test]
+fn bench_with_a_two_light_view_benches_each_light() {
+    let dir = out_dir("bench-lights");
+    let view = penumbra::assets::default_scene().view();
+    let mut second = view.light;
+    second.corner += glam::Vec3::new(4.0, 0.0, -2.0);
+    second.edge_u *= 0.5;
+    second.edge_v *= 0.5;
+    let json = serde_json::json!({ "camera": view.camera, "lights": [view.light, second] });
+    std::fs::write(dir.join("two.json"), json.to_string()).unwrap();
+    let (ok, stdout, stderr) = penumbra(
+        &dir,
+        &[
+            "bench",
+            "playground",
+            "--view",
+            "two.json",
+            "--size",
+            "32x32",
+            "--runs",
+            "1",
+            "--tracers",
+            "mft",
+            "--no-counters",
+            "--animate-frames",
+            "0",
+            "--json",
+            "b.json",
+        ],
+    );
+    assert!(ok, "bench failed:\n{stdout}\n{stderr}");
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("b.json")).unwrap()).unwrap();
+    let cases = report["cases"].as_array().unwrap();
+    assert_eq!(cases.len(), 2, "{report}");
+    for (i, case) in cases.iter().enumerate() {
+        assert_eq!(case["view"], format!("two.json, light {}", i + 1));
+        assert!(case["tracers"][0]["shadow_ms_median"].as_f64().unwrap() > 0.0);
+    }
+}

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use penumbra::scene::Scene;
-use penumbra::scene::view::View;
+use penumbra::scene::view::{View, ViewFile};
 use penumbra::{Result, assets};
 
 use super::BenchArgs;
@@ -54,12 +54,30 @@ pub(super) struct Case {
 
 pub(super) fn cases(args: &BenchArgs) -> Result<Vec<Case>> {
     let mut out = Vec::new();
-    let forced_view = args.view.as_deref().map(View::load).transpose()?;
+    // A view file with several lights gives a case per light (`FILE, light N`).
+    let forced_views: Option<Vec<(String, View)>> = match args.view.as_deref() {
+        None => None,
+        Some(path) => {
+            let views = ViewFile::load(path)?.views();
+            let several = views.len() > 1;
+            Some(
+                views
+                    .into_iter()
+                    .enumerate()
+                    .map(|(i, v)| {
+                        let name = if several {
+                            format!("{}, light {}", path.display(), i + 1)
+                        } else {
+                            path.display().to_string()
+                        };
+                        (name, v)
+                    })
+                    .collect(),
+            )
+        }
+    };
     let mut push = |name: String, scene: Scene, views: Vec<(String, View)>| {
-        let views = match (forced_view, &args.view) {
-            (Some(view), Some(path)) => vec![(path.display().to_string(), view)],
-            _ => views,
-        };
+        let views = forced_views.clone().unwrap_or(views);
         for (view_name, view) in views {
             let mut scene = scene.clone();
             if let Some(y) = view.ground_y {
