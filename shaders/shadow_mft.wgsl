@@ -70,10 +70,6 @@ var<private> f_bmin: vec3<f32>;
 var<private> f_bmax: vec3<f32>;
 var<private> f_initial: u32;
 
-// The vector's traversal stack (the same in every lane).
-var<private> stack_node: array<u32, 64>;
-var<private> stack_mask: array<u32, 64>;
-
 // Traversal and leaves are two stages with one leaf between them: the
 // traversal walks on to the next leaf (`p_*`) while the leaf stage tests the
 // current one, so that one pass of the loop can do work in both. Every lane
@@ -571,17 +567,8 @@ fn main(ids: Vec16Ids) {
                 shrink_to(shrunk_for & MASK_FULL);
             }
             // At most STACK_SIZE passes, counted by lavapipe with the others (ITERATION_BUDGET).
-            var i = 0u;
-            loop {
-                if i >= t_depth {
-                    break;
-                }
-                stack_node[i] = state[base + ST_STACK_NODE + i];
-                stack_mask[i] = state[base + ST_STACK_MASK + i];
-                i += 1u;
-            }
             // Ended by the driver before the stack was read: report it, trace nothing.
-            cut = i < t_depth;
+            cut = !restore_stack(base, t_depth);
             running = !cut;
         }
         let has_cand = running && cand != 0u;
@@ -726,16 +713,7 @@ fn main(ids: Vec16Ids) {
             state[base + ST_PENDING] = p_first;
             state[base + ST_PENDING + 1u] = p_end;
             state[base + ST_PENDING + 2u] = p_mask;
-            var i = 0u;
-            loop {
-                if i >= t_depth {
-                    break;
-                }
-                state[base + ST_STACK_NODE + i] = stack_node[i];
-                state[base + ST_STACK_MASK + i] = stack_mask[i];
-                i += 1u;
-            }
-            if i < t_depth {
+            if !save_stack(base, t_depth) {
                 // Ended by the driver: the saved stack is incomplete.
                 state[base + ST_STATUS] = 0u;
                 atomicAdd(&status[WORD_LOOP_CUT], 1u);

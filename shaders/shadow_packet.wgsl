@@ -28,9 +28,6 @@ const PACKET_STATE_WORDS: u32 = 160u;
 // (shared/counters, when COUNTERS); [WORD_LOOP_CUT]: pixels whose loop the driver ended.
 @group(0) @binding(7) var<storage, read_write> status: array<atomic<u32>>;
 
-var<private> stack_node: array<u32, 64>;
-var<private> stack_mask: array<u32, 64>;
-
 @compute @workgroup_size(VEC16_WG_SIZE)
 fn main(ids: Vec16Ids) {
     vec16_init(ids);
@@ -91,17 +88,8 @@ fn main(ids: Vec16Ids) {
             popping = state[base + 7u];
             blocked = state[base + ST_LANES + g_lane] != 0u;
             // At most STACK_SIZE passes, counted by lavapipe with the others.
-            var i = 0u;
-            loop {
-                if i >= depth {
-                    break;
-                }
-                stack_node[i] = state[base + ST_STACK_NODE + i];
-                stack_mask[i] = state[base + ST_STACK_MASK + i];
-                i += 1u;
-            }
             // Ended by the driver before the stack was read: report it, trace nothing.
-            cut = i < depth;
+            cut = !restore_stack(base, depth);
             running = !cut;
         }
         children = load_node(node).first;
@@ -241,16 +229,7 @@ fn main(ids: Vec16Ids) {
             state[base + 5u] = alive;
             state[base + 6u] = depth;
             state[base + 7u] = popping;
-            var i = 0u;
-            loop {
-                if i >= depth {
-                    break;
-                }
-                state[base + ST_STACK_NODE + i] = stack_node[i];
-                state[base + ST_STACK_MASK + i] = stack_mask[i];
-                i += 1u;
-            }
-            if i < depth {
+            if !save_stack(base, depth) {
                 // Ended by the driver: the saved stack is incomplete.
                 state[base + ST_STATUS] = 0u;
                 atomicAdd(&status[WORD_LOOP_CUT], 1u);
