@@ -55,9 +55,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             break;
         }
         if cursor < end {
-            let h = intersect_triangle(triangles[cursor], origin, dir, t_best);
+            let tri = triangles[cursor];
+            let h = intersect_triangle(tri, origin, dir, t_best);
             n_triangles += 1u;
-            if h.x >= 0.0 {
+            if h.x >= 0.0 && !passes_alpha(tri, cursor, h) {
                 t_best = h.x;
                 best = h;
                 best_tri = cursor;

@@ -174,7 +174,7 @@ fn frustum_culls_triangle(tri: BvhTriangle) -> bool {
 // Ray k against triangle `ix`: exactly the per-ray kernel's test and update.
 fn test_ray(k: u32, tri: BvhTriangle, ix: u32) {
     let h = intersect_triangle(tri, camera.eye, f_dirs[k], f_t[k]);
-    if h.x >= 0.0 {
+    if h.x >= 0.0 && !passes_alpha(tri, ix, h) {
         f_t[k] = h.x;
         f_best[k] = h;
         f_tri[k] = ix;

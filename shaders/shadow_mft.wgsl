@@ -2,6 +2,7 @@
 // One kernel, long because traversal, culling, both leaf modes and suspension are its one job.
 // Dispatched by the shadow pass (src/gpu/shadow_tracer.rs); CPU twin: src/reference/shadow_mft.rs.
 
+#import shared/alpha
 #import shared/bvh
 #import shared/counters
 #import shared/descend
@@ -52,6 +53,8 @@ const BOUNDS_PAD: f32 = 1.0 / 262144.0;  // 2^-18
 // [WORD_STATUS]: tiles suspended by this dispatch; [1..6]: the Table 1 counters
 // (shared/counters, when COUNTERS); [WORD_LOOP_CUT]: tiles whose loop the driver ended.
 @group(0) @binding(7) var<storage, read_write> status: array<atomic<u32>>;
+// The alpha words (bvh::AlphaMasks) that shared/alpha reads for alpha-tested triangles.
+@group(0) @binding(8) var<storage, read> alpha: array<u32>;
 
 // This lane's frustum.
 var<private> f_origin: vec3<f32>;
@@ -364,10 +367,37 @@ fn test_triangle(tri: BvhTriangle) -> u32 {
         return 0u;
     }
     // Unrolled on purpose: every loop iteration counts towards lavapipe's limit.
-    return TESTED | ray_bit(0u, e) | ray_bit(1u, e) | ray_bit(2u, e) | ray_bit(3u, e)
+    var bits = ray_bit(0u, e) | ray_bit(1u, e) | ray_bit(2u, e) | ray_bit(3u, e)
         | ray_bit(4u, e) | ray_bit(5u, e) | ray_bit(6u, e) | ray_bit(7u, e)
         | ray_bit(8u, e) | ray_bit(9u, e) | ray_bit(10u, e) | ray_bit(11u, e)
         | ray_bit(12u, e) | ray_bit(13u, e) | ray_bit(14u, e) | ray_bit(15u, e);
+    if tri.alpha != ALPHA_OPAQUE && bits != 0u {
+        bits &= ~(passed_bit(0u, tri.alpha, e, bits) | passed_bit(1u, tri.alpha, e, bits)
+            | passed_bit(2u, tri.alpha, e, bits) | passed_bit(3u, tri.alpha, e, bits)
+            | passed_bit(4u, tri.alpha, e, bits) | passed_bit(5u, tri.alpha, e, bits)
+            | passed_bit(6u, tri.alpha, e, bits) | passed_bit(7u, tri.alpha, e, bits)
+            | passed_bit(8u, tri.alpha, e, bits) | passed_bit(9u, tri.alpha, e, bits)
+            | passed_bit(10u, tri.alpha, e, bits) | passed_bit(11u, tri.alpha, e, bits)
+            | passed_bit(12u, tri.alpha, e, bits) | passed_bit(13u, tri.alpha, e, bits)
+            | passed_bit(14u, tri.alpha, e, bits) | passed_bit(15u, tri.alpha, e, bits));
+    }
+    return TESTED | bits;
+}
+
+// The barycentric weights (corners 0, 1, 2) of the point where the ray to light
+// coordinates `st` meets the triangle's plane: edge function k is opposite corner k + 2.
+fn st_weights(e: EdgeFunctions, st: vec2<f32>) -> vec3<f32> {
+    let v = edge_values(e, st);
+    let inv = 1.0 / (v.x + v.y + v.z);
+    return vec3<f32>(v.y, v.z, v.x) * inv;
+}
+
+// Bit j if ray j is in `bits` (it hits the alpha-tested triangle `record`) but passes it.
+fn passed_bit(j: u32, record: u32, e: EdgeFunctions, bits: u32) -> u32 {
+    if (bits & (1u << j)) != 0u && alpha_passes(record, st_weights(e, f_st[j])) {
+        return 1u << j;
+    }
+    return 0u;
 }
 
 // Transposed leaves: whether ray g_lane of frustum f (a lane of this vector)
@@ -376,7 +406,13 @@ fn test_triangle(tri: BvhTriangle) -> u32 {
 fn transposed_ray_hits(tri: BvhTriangle, f: u32) -> bool {
     let o = wg_origins[g_vector_in_wg * 16u + f];
     let w = triangle_wedge(tri, o);
-    return (w.d != 0.0) & st_hit(edge_functions(w, o), point_st(light_points[f * 16u + g_lane].xyz, light_frame()));
+    let e = edge_functions(w, o);
+    let st = point_st(light_points[f * 16u + g_lane].xyz, light_frame());
+    let hit = (w.d != 0.0) & st_hit(e, st);
+    if hit && tri.alpha != ALPHA_OPAQUE {
+        return !alpha_passes(tri.alpha, st_weights(e, st));
+    }
+    return hit;
 }
 
 // Moves the traversal to a node (first child or triangle `first`, `count`

@@ -3,7 +3,9 @@
 //! rays per pixel as `packet` and `per-ray` (the pixel's interleaved set, the same origin,
 //! direction and extent, the same rules for rays below the horizon or behind the light),
 //! traced as one `rtcOccluded16` packet per pixel on all cores, into the same 16-bit masks.
-//! Nothing here shares the kernels' arithmetic, so it is also an independent oracle.
+//! Nothing here shares the kernels' arithmetic, so it is also an independent oracle; for
+//! alpha-tested triangles an occlusion filter asks [`crate::bvh::AlphaMasks::passes_record`]
+//! at Embree's own hit (the mask lookup is shared, the ray–triangle test is Embree's).
 //!
 //! Only the dozen functions and three structs needed are bound, from Embree 3.13's
 //! headers (`rtcore_*.h`); the struct layouts are those of its default build
@@ -86,6 +88,8 @@ unsafe extern "C" {
     fn rtcCommitGeometry(geometry: RtcGeometry);
     fn rtcAttachGeometry(scene: RtcScene, geometry: RtcGeometry) -> c_uint;
     fn rtcReleaseGeometry(geometry: RtcGeometry);
+    fn rtcSetGeometryOccludedFilterFunction(geometry: RtcGeometry, filter: Option<RtcFilterFunctionN>);
+    fn rtcSetGeometryUserData(geometry: RtcGeometry, ptr: *mut c_void);
     fn rtcOccluded16(
         valid: *const Valid16,
         scene: RtcScene,
@@ -94,11 +98,63 @@ unsafe extern "C" {
     );
 }
 
+/// `RTCFilterFunctionNArguments` (Embree 3).
+#[repr(C)]
+struct RtcFilterFunctionNArguments {
+    valid: *mut c_int,
+    geometry_user_ptr: *mut c_void,
+    context: *const RtcIntersectContext,
+    ray: *mut c_void,
+    hit: *const c_void,
+    n: c_uint,
+}
+
+type RtcFilterFunctionN = unsafe extern "C" fn(args: *const RtcFilterFunctionNArguments);
+
+/// What the occlusion filter reads: each triangle's [`crate::contract::layout::BvhTriangle::alpha`]
+/// (by Embree's primitive ID, which is the leaf-order index) and the masks.
+struct AlphaFilter {
+    records: Vec<u32>,
+    masks: crate::bvh::AlphaMasks,
+}
+
+/// Embree's occlusion filter: rejects the hits where the triangle's alpha mask lets the
+/// ray pass. `RTCHitN` is structure-of-arrays: `Ng_x, Ng_y, Ng_z, u, v, primID, …`, each
+/// `N` wide; `u` and `v` weigh corners 1 and 2 (Embree's triangle is `(1-u-v)·v0 + u·v1 + v·v2`).
+unsafe extern "C" fn alpha_filter(args: *const RtcFilterFunctionNArguments) {
+    // SAFETY: Embree passes valid arguments for `n` lanes and the user pointer it was
+    // given, an `AlphaFilter` that the `EmbreeScene` keeps alive.
+    unsafe {
+        let args = &*args;
+        let n = args.n as usize;
+        let filter = &*(args.geometry_user_ptr as *const AlphaFilter);
+        let floats = args.hit as *const f32;
+        let ints = args.hit as *const c_uint;
+        for i in 0..n {
+            let valid = args.valid.add(i);
+            if *valid == 0 {
+                continue;
+            }
+            let (u, v) = (*floats.add(3 * n + i), *floats.add(4 * n + i));
+            let prim = *ints.add(5 * n + i) as usize;
+            if filter
+                .masks
+                .passes_record(filter.records[prim], [1.0 - u - v, u, v])
+            {
+                *valid = 0;
+            }
+        }
+    }
+}
+
 /// An Embree device and a committed scene of a BVH's triangles (the same corners, in the
 /// same leaf order, as the GPU reads).
 pub struct EmbreeScene {
     device: RtcDevice,
     scene: RtcScene,
+    /// The occlusion filter's data when the scene has alpha-tested triangles (boxed: Embree
+    /// holds its address).
+    alpha: Option<Box<AlphaFilter>>,
     /// Milliseconds Embree took to build its own BVH (`rtcCommitScene`).
     pub build_ms: f64,
 }
@@ -125,9 +181,16 @@ impl EmbreeScene {
                 return Err(Error::invalid("Embree", "rtcNewDevice failed"));
             }
             let scene = rtcNewScene(device);
-            let out = EmbreeScene {
+            let alpha = (bvh.alpha.triangles > 0).then(|| {
+                Box::new(AlphaFilter {
+                    records: bvh.triangles.iter().map(|t| t.alpha).collect(),
+                    masks: bvh.alpha.clone(),
+                })
+            });
+            let mut out = EmbreeScene {
                 device,
                 scene,
+                alpha,
                 build_ms: 0.0,
             };
             rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
@@ -150,6 +213,10 @@ impl EmbreeScene {
                     indices[3 * i + k] = (3 * i + k) as u32;
                 }
             }
+            if let Some(alpha) = &out.alpha {
+                rtcSetGeometryUserData(geometry, &**alpha as *const AlphaFilter as *mut c_void);
+                rtcSetGeometryOccludedFilterFunction(geometry, Some(alpha_filter));
+            }
             rtcCommitGeometry(geometry);
             rtcAttachGeometry(scene, geometry);
             rtcReleaseGeometry(geometry);
@@ -157,7 +224,6 @@ impl EmbreeScene {
             rtcCommitScene(scene);
             let build_ms = start.elapsed().as_secs_f64() * 1e3;
             // `out` owns the handles (its Drop releases them): update it, do not copy them out.
-            let mut out = out;
             out.build_ms = build_ms;
             match rtcGetDeviceError(device) {
                 0 => Ok(out),

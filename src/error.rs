@@ -87,7 +87,7 @@ pub enum Error {
     DeviceUnsupported {
         /// The pass that cannot run, e.g. `the embedded shadow pass`.
         what: String,
-        /// Each missing feature or too-small limit, e.g. `max_storage_buffers_per_shader_stage 4 (needs 7)`.
+        /// Each missing feature or too-small limit, e.g. `max_storage_buffers_per_shader_stage 4 (needs 8)`.
         missing: Vec<String>,
     },
     /// Ray queries were asked for ([`crate::gpu::GpuOptions::ray_query`]) on an adapter

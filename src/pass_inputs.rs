@@ -4,9 +4,10 @@
 use glam::{Vec2, Vec3, Vec4};
 
 use crate::bvh::Bvh;
+use crate::contract::alpha::{BLEND_ALPHA_CUTOFF, texel_index};
 use crate::contract::layout::{CameraParams, GpuMaterial, GpuTexture, ORIGIN_OFFSET_ULPS, ShadingTriangle};
 use crate::scene::view::Camera;
-use crate::scene::{ImageSource, Scene};
+use crate::scene::{AlphaMode, ImageSource, Material, Scene};
 use crate::{Error, Result};
 
 /// Shadow-ray origins leave the surface by this fraction of the scene's
@@ -106,8 +107,34 @@ pub fn gpu_materials(scene: &Scene) -> Vec<GpuMaterial> {
                 m.base_color_factor[2],
             ),
             texture: m.base_color_texture.unwrap_or(u32::MAX),
+            alpha_factor: m.base_color_factor[3],
+            alpha_cutoff: alpha_cutoff(m),
+            pad: [0; 2],
         })
         .collect()
+}
+
+/// The cutoff below which rays pass `m`'s surface: its `alphaCutoff` for `MASK`,
+/// [`BLEND_ALPHA_CUTOFF`] for `BLEND`, and 0 (never passes) for `OPAQUE`.
+pub fn alpha_cutoff(m: &Material) -> f32 {
+    match m.alpha_mode {
+        AlphaMode::Opaque => 0.0,
+        AlphaMode::Mask => m.alpha_cutoff,
+        AlphaMode::Blend => BLEND_ALPHA_CUTOFF,
+    }
+}
+
+/// Scene image `i` decoded to 8-bit RGBA; errors as for [`ShadingData::new`].
+pub(crate) fn decode_rgba8(scene: &Scene, i: usize) -> Result<image::RgbaImage> {
+    let (bytes, what) = image_bytes(scene, i)?;
+    Ok(image::load_from_memory(&bytes)
+        .map_err(|e| Error::scene(&scene.source, format!("{what}: cannot decode the texture: {e}")))?
+        .to_rgba8())
+}
+
+/// A texel's alpha as the kernels see it (linear, unlike its colour).
+pub(crate) fn texel_alpha(a: u8) -> f32 {
+    a as f32 / 255.0
 }
 
 /// Everything the primary pass needs besides the BVH: per-triangle shading
@@ -132,10 +159,7 @@ impl ShadingData {
         let mut textures = Vec::with_capacity(scene.images.len());
         let mut texels = Vec::new();
         for i in 0..scene.images.len() {
-            let (bytes, what) = image_bytes(scene, i)?;
-            let image = image::load_from_memory(&bytes)
-                .map_err(|e| Error::scene(&scene.source, format!("{what}: cannot decode the texture: {e}")))?
-                .to_rgba8();
+            let image = decode_rgba8(scene, i)?;
             textures.push(GpuTexture {
                 offset: texels.len() as u32,
                 width: image.width(),
@@ -148,7 +172,7 @@ impl ShadingData {
                     srgb_to_linear(p[0]),
                     srgb_to_linear(p[1]),
                     srgb_to_linear(p[2]),
-                    p[3] as f32 / 255.0,
+                    texel_alpha(p[3]),
                 )
             }));
         }
@@ -171,11 +195,8 @@ impl ShadingData {
         match self.textures.get(m.texture as usize) {
             None => m.base_color,
             Some(t) => {
-                let u = uv.x - uv.x.floor();
-                let v = uv.y - uv.y.floor();
-                let x = ((u * t.width as f32) as u32).min(t.width - 1);
-                let y = ((v * t.height as f32) as u32).min(t.height - 1);
-                m.base_color * self.texels[(t.offset + y * t.width + x) as usize].truncate()
+                m.base_color
+                    * self.texels[(t.offset + texel_index(t.width, t.height, uv)) as usize].truncate()
             }
         }
     }
@@ -247,10 +268,12 @@ mod tests {
                 GpuMaterial {
                     base_color: Vec3::new(0.5, 1.0, 1.0),
                     texture: 0,
+                    ..Default::default()
                 },
                 GpuMaterial {
                     base_color: Vec3::splat(0.25),
                     texture: u32::MAX,
+                    ..Default::default()
                 },
             ],
             textures: vec![GpuTexture {

@@ -50,6 +50,7 @@ pub static SOURCES: &[(&str, &str)] = &[
         "shadow_ray_query",
         include_str!("../shaders/shadow_ray_query.wgsl"),
     ),
+    ("shared/alpha", include_str!("../shaders/shared/alpha.wgsl")),
     ("shared/bvh", include_str!("../shaders/shared/bvh.wgsl")),
     (
         "shared/bvh_vec16",

@@ -23,7 +23,7 @@ struct BvhTriangle {
     v0: vec3<f32>,         // bytes 0..12: corner 0
     scene_index: u32,      // bytes 12..16: index of the triangle in the loaded scene
     v1: vec3<f32>,         // bytes 16..28: corner 1
-    pad1: u32,             // bytes 28..32: unused
+    alpha: u32,            // bytes 28..32: its AlphaTriangle's word offset, ALPHA_OPAQUE for none
     v2: vec3<f32>,         // bytes 32..44: corner 2
     pad2: u32,             // bytes 44..48: unused
 }

@@ -48,10 +48,43 @@ struct ShadingTriangle {
     pad3: array<u32, 2>,  // bytes 72..80
 }
 
-// One material, 16 bytes.
+// One material, 32 bytes.
 struct GpuMaterial {
     base_color: vec3<f32>,  // bytes 0..12: linear RGB factor
     texture: u32,           // bytes 12..16: base colour texture, 0xffffffff = none
+    alpha_factor: f32,      // bytes 16..20: the base colour factor's alpha
+    alpha_cutoff: f32,      // bytes 20..24: alpha-tested triangles are absent where alpha is below
+    pad: array<u32, 2>,     // bytes 24..32
+}
+
+// The texture coordinates of an alpha-tested triangle and its mask, 32 bytes, at
+// BvhTriangle.alpha in the alpha words (shared/alpha reads them word by word).
+struct AlphaTriangle {
+    uv0: vec2<f32>,  // bytes 0..8: TEXCOORD_0 at corner 0
+    uv1: vec2<f32>,  // bytes 8..16
+    uv2: vec2<f32>,  // bytes 16..24
+    mask: u32,       // bytes 24..28: word offset of its AlphaMask
+    pad: u32,        // bytes 28..32
+}
+
+// One material's coverage, 16 bytes: a bit per texel, set where the surface blocks.
+struct AlphaMask {
+    width: u32,   // bytes 0..4
+    height: u32,  // bytes 4..8
+    bits: u32,    // bytes 8..12: word offset of the first bit word
+    pad: u32,     // bytes 12..16
+}
+
+// BvhTriangle.alpha of a triangle that always blocks (contract::alpha::OPAQUE).
+const ALPHA_OPAQUE: u32 = 0u;
+
+// The texel nearest to `uv` (coordinates wrap), row-major; twin of contract::alpha::texel_index.
+fn texel_index(width: u32, height: u32, uv: vec2<f32>) -> u32 {
+    let u = uv.x - floor(uv.x);
+    let v = uv.y - floor(uv.y);
+    let x = min(u32(u * f32(width)), width - 1u);
+    let y = min(u32(v * f32(height)), height - 1u);
+    return y * width + x;
 }
 
 // Where a texture's linear RGBA texels are in the texel buffer, 16 bytes.

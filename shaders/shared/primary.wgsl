@@ -32,11 +32,26 @@ fn albedo(material: GpuMaterial, uv: vec2<f32>) -> vec3<f32> {
         return material.base_color;
     }
     let t = textures[material.texture];
-    let u = uv.x - floor(uv.x);
-    let v = uv.y - floor(uv.y);
-    let x = min(u32(u * f32(t.width)), t.width - 1u);
-    let y = min(u32(v * f32(t.height)), t.height - 1u);
-    return material.base_color * texels[t.offset + y * t.width + x].xyz;
+    return material.base_color * texels[t.offset + texel_index(t.width, t.height, uv)].xyz;
+}
+
+// Whether a camera ray passes triangle `ix` (`tri`) at its hit `h` = (t, u, v): only an
+// alpha-tested triangle's surface can be absent, where texel alpha × factor is below the
+// cutoff. The texels and materials are the shading's; the shadow kernels' bits
+// (shared/alpha) are made from the same numbers. Twin: AlphaMasks::passes.
+fn passes_alpha(tri: BvhTriangle, ix: u32, h: vec3<f32>) -> bool {
+    if tri.alpha == ALPHA_OPAQUE {
+        return false;
+    }
+    let sh = shading[ix];
+    let m = materials[sh.material];
+    var alpha = m.alpha_factor;
+    if m.texture < arrayLength(&textures) {
+        let t = textures[m.texture];
+        let uv = sh.uv0 * (1.0 - h.y - h.z) + sh.uv1 * h.y + sh.uv2 * h.z;
+        alpha *= texels[t.offset + texel_index(t.width, t.height, uv)].w;
+    }
+    return alpha < m.alpha_cutoff;
 }
 
 // The texel of the camera ray from the eye along `dir` whose closest hit is

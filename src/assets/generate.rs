@@ -10,6 +10,8 @@
 //!   post.
 //! - `lattice`: a dense two-layer lattice of thin bars floating at 1 m over a
 //!   few small cubes.
+//! - `screen`: a perforated screen floating at 1 m, one quad whose holes are an
+//!   alpha-masked texture (`alphaMode: MASK`), over a small box.
 //!
 //! Lights are square, face down (`cross(edge_u, edge_v)` is -y), are about a
 //! sixth of the scene's width and sit off-centre. Their intensity is chosen so
@@ -21,7 +23,7 @@
 
 use glam::{Mat4, Quat, Vec3, Vec4};
 
-use super::glb_writer::{GlbCamera, GlbScene, Material, Object, Placement, write_glb};
+use super::glb_writer::{GlbCamera, GlbScene, MaskTexture, Material, Object, Placement, write_glb};
 use super::shapes::{self, TriangleMesh};
 use crate::scene::view::{Camera, QuadLight, View};
 
@@ -50,13 +52,14 @@ impl GeneratedScene {
 }
 
 /// Names of the generated scenes, the default first.
-pub const SCENE_NAMES: [&str; 2] = ["playground", "lattice"];
+pub const SCENE_NAMES: [&str; 3] = ["playground", "lattice", "screen"];
 
 /// Generates the scene called `name`, or `None` if there is no such scene.
 pub fn generate(name: &str) -> Option<GeneratedScene> {
     let (name, (scene, view)) = match name {
         "playground" => ("playground", playground()),
         "lattice" => ("lattice", lattice()),
+        "screen" => ("screen", screen()),
         _ => return None,
     };
     Some(GeneratedScene {
@@ -129,6 +132,7 @@ fn material(name: &str, rgb: [f32; 3]) -> Material {
     Material {
         name: name.into(),
         base_color: [rgb[0], rgb[1], rgb[2], 1.0],
+        mask: None,
     }
 }
 
@@ -136,6 +140,7 @@ fn object(name: &str, mesh: TriangleMesh, material: usize, placement: Placement)
     Object {
         name: name.into(),
         mesh,
+        uvs: Vec::new(),
         material,
         placement,
     }
@@ -347,6 +352,118 @@ fn lattice() -> (GlbScene, View) {
     let light = downward_square_light(Vec3::new(-1.2, 7.0, 0.8), 1.6);
     let scene = GlbScene {
         materials: materials(),
+        objects,
+        camera: Some(glb_camera(&camera)),
+    };
+    (
+        scene,
+        View {
+            camera,
+            light,
+            ground_y: None,
+        },
+    )
+}
+
+/// Texels per side of the screen's texture, and the period and radius (in texels) of
+/// its round holes: 4 × 4 holes, each a disc of alpha 0 in an opaque texture.
+pub const SCREEN_TEXELS: u32 = 32;
+const SCREEN_HOLE_PERIOD: u32 = 8;
+const SCREEN_HOLE_RADIUS: f32 = 2.6;
+/// The screen's side (m).
+pub const SCREEN_SIZE: f32 = 3.0;
+/// Height of the screen's plane over the ground (m).
+pub const SCREEN_HEIGHT: f32 = 1.0;
+
+/// Whether texel `(x, y)` of the screen's texture is in a hole (alpha 0).
+pub fn screen_texel_is_hole(x: u32, y: u32) -> bool {
+    let centre = 0.5 * SCREEN_HOLE_PERIOD as f32;
+    let dx = (x % SCREEN_HOLE_PERIOD) as f32 + 0.5 - centre;
+    let dy = (y % SCREEN_HOLE_PERIOD) as f32 + 0.5 - centre;
+    dx * dx + dy * dy <= SCREEN_HOLE_RADIUS * SCREEN_HOLE_RADIUS
+}
+
+/// The screen's texture as PNG: orange where the screen is, alpha 0 in the holes.
+fn screen_png() -> Vec<u8> {
+    use image::ImageEncoder;
+    let image = image::RgbaImage::from_fn(SCREEN_TEXELS, SCREEN_TEXELS, |x, y| {
+        if screen_texel_is_hole(x, y) {
+            image::Rgba([0, 0, 0, 0])
+        } else {
+            image::Rgba([230, 140, 50, 255])
+        }
+    });
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(
+            image.as_raw(),
+            SCREEN_TEXELS,
+            SCREEN_TEXELS,
+            image::ExtendedColorType::Rgba8,
+        )
+        .expect("encoding a small RGBA image to memory cannot fail");
+    png
+}
+
+/// A quad in the plane y = 0 facing +y, `size` on a side and centred on the origin,
+/// with texture coordinates 0..1 over it (u along +x, v along +z).
+fn textured_square(size: f32) -> (TriangleMesh, Vec<[f32; 2]>) {
+    let h = 0.5 * size;
+    let mesh = TriangleMesh {
+        positions: vec![[-h, 0.0, -h], [h, 0.0, -h], [h, 0.0, h], [-h, 0.0, h]],
+        normals: vec![[0.0, 1.0, 0.0]; 4],
+        // Counter-clockwise seen from +y.
+        indices: vec![0, 2, 1, 0, 3, 2],
+    };
+    (mesh, vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+}
+
+/// A perforated screen (one alpha-masked quad) floating over a small box on an 8 m × 8 m
+/// ground: the holes' shadows are where the light comes through the texture.
+fn screen() -> (GlbScene, View) {
+    let mut materials = materials();
+    let screen_material = materials.len();
+    materials.push(Material {
+        name: "perforated".into(),
+        base_color: [1.0; 4],
+        mask: Some(MaskTexture {
+            png: screen_png(),
+            cutoff: 0.5,
+        }),
+    });
+    let (quad, uvs) = textured_square(SCREEN_SIZE);
+    let objects = vec![
+        object(
+            "ground",
+            shapes::ground_plane(8.0, 8.0, 16, 16),
+            GROUND,
+            Placement::translation(Vec3::ZERO),
+        ),
+        Object {
+            name: "screen".into(),
+            mesh: quad,
+            uvs,
+            material: screen_material,
+            placement: Placement::translation(Vec3::Y * SCREEN_HEIGHT),
+        },
+        object(
+            "box",
+            shapes::box_on_ground(Vec3::new(0.4, 0.5, 0.4)),
+            RED,
+            Placement::Matrix(matrix_y_rotation(Vec3::new(0.75, 0.0, 0.75), 25.0, Vec3::ONE)),
+        ),
+    ];
+    let camera = Camera {
+        eye: Vec3::new(3.5, 3.2, 4.5),
+        target: Vec3::new(0.0, 0.3, 0.0),
+        up: Vec3::Y,
+        fov_y_degrees: 45.0,
+    };
+    // 0.6 m, 3 m over the screen: penumbrae of 0.6 · 1 / 3 = 0.2 m on the ground, less
+    // than the holes' 0.49 m, so each hole casts a fully lit spot with a soft rim.
+    let light = downward_square_light(Vec3::new(-0.3, 4.0, 0.2), 0.6);
+    let scene = GlbScene {
+        materials,
         objects,
         camera: Some(glb_camera(&camera)),
     };

@@ -1,6 +1,7 @@
 //! A small, deterministic glTF 2.0 binary (.glb) writer for the generated
-//! scenes: meshes with positions, normals and `u32` indices, flat-coloured
-//! materials, node transforms (TRS or matrix) and one perspective camera.
+//! scenes: meshes with positions, normals, optional texture coordinates and `u32`
+//! indices, flat-coloured materials (optionally with an alpha-masked PNG base colour
+//! texture), node transforms (TRS or matrix) and one perspective camera.
 //!
 //! The same input always gives the same bytes: the JSON is built in a fixed
 //! order, with no timestamps, and every float is written as the shortest
@@ -58,6 +59,17 @@ pub struct Material {
     pub name: String,
     /// Linear RGBA `baseColorFactor`.
     pub base_color: [f32; 4],
+    /// A base colour texture whose alpha masks the surface (`alphaMode: MASK`).
+    pub mask: Option<MaskTexture>,
+}
+
+/// An embedded PNG base colour texture and the `alphaCutoff` its alpha is tested with.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaskTexture {
+    /// The PNG file's bytes.
+    pub png: Vec<u8>,
+    /// `alphaCutoff`.
+    pub cutoff: f32,
 }
 
 /// One mesh on its own node.
@@ -67,6 +79,8 @@ pub struct Object {
     pub name: String,
     /// Geometry, in the node's space.
     pub mesh: TriangleMesh,
+    /// TEXCOORD_0, one per position of the mesh, or empty for none.
+    pub uvs: Vec<[f32; 2]>,
     /// Index into [`GlbScene::materials`].
     pub material: usize,
     /// Where the node is.
@@ -179,6 +193,29 @@ impl BinBuilder {
         self.push_accessor(accessor)
     }
 
+    /// Adds a VEC2 float attribute; returns its accessor index.
+    fn push_vec2s(&mut self, data: &[[f32; 2]]) -> usize {
+        let view = self.push_view(bytemuck::cast_slice(data), ARRAY_BUFFER);
+        self.push_accessor(json!({
+            "bufferView": view,
+            "componentType": COMPONENT_F32,
+            "count": data.len(),
+            "type": "VEC2",
+        }))
+    }
+
+    /// Adds an image's bytes as a buffer view with no target; returns the view's index.
+    fn push_image(&mut self, data: &[u8]) -> usize {
+        pad_to_4(&mut self.bytes, 0);
+        self.views.push(json!({
+            "buffer": 0,
+            "byteOffset": self.bytes.len(),
+            "byteLength": data.len(),
+        }));
+        self.bytes.extend_from_slice(data);
+        self.views.len() - 1
+    }
+
     /// Adds a `u32` index list; returns its accessor index.
     fn push_indices(&mut self, indices: &[u32]) -> usize {
         let view = self.push_view(bytemuck::cast_slice(indices), ELEMENT_ARRAY_BUFFER);
@@ -228,15 +265,31 @@ fn node_json(name: &str, placement: &Placement) -> Value {
     }
 }
 
-fn material_json(material: &Material) -> Value {
-    json!({
+/// The material's JSON; a mask texture becomes the next image (a buffer view of `bin`)
+/// and texture, index `textures.len()`.
+fn material_json(
+    material: &Material,
+    bin: &mut BinBuilder,
+    images: &mut Vec<Value>,
+    textures: &mut Vec<Value>,
+) -> Value {
+    let mut json = json!({
         "name": material.name,
         "pbrMetallicRoughness": {
             "baseColorFactor": json_floats(&material.base_color),
             "metallicFactor": 0,
             "roughnessFactor": 1,
         },
-    })
+    });
+    if let Some(mask) = &material.mask {
+        let view = bin.push_image(&mask.png);
+        images.push(json!({ "bufferView": view, "mimeType": "image/png" }));
+        textures.push(json!({ "source": images.len() - 1 }));
+        json["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": textures.len() - 1 });
+        json["alphaMode"] = json!("MASK");
+        json["alphaCutoff"] = json_f32(mask.cutoff);
+    }
+    json
 }
 
 /// The glTF JSON document and its BIN chunk (not yet padded).
@@ -247,13 +300,17 @@ fn document(scene: &GlbScene) -> (Value, Vec<u8>) {
     for object in &scene.objects {
         let position = bin.push_vec3s(&object.mesh.positions, true);
         let normal = bin.push_vec3s(&object.mesh.normals, false);
+        let mut attributes = json!({ "POSITION": position, "NORMAL": normal });
+        if !object.uvs.is_empty() {
+            attributes["TEXCOORD_0"] = json!(bin.push_vec2s(&object.uvs));
+        }
         let indices = bin.push_indices(&object.mesh.indices);
         let mut node = node_json(&object.name, &object.placement);
         node["mesh"] = json!(meshes.len());
         meshes.push(json!({
             "name": object.name,
             "primitives": [{
-                "attributes": { "POSITION": position, "NORMAL": normal },
+                "attributes": attributes,
                 "indices": indices,
                 "material": object.material,
                 "mode": MODE_TRIANGLES,
@@ -261,12 +318,22 @@ fn document(scene: &GlbScene) -> (Value, Vec<u8>) {
         }));
         nodes.push(node);
     }
+    let (mut images, mut textures) = (Vec::new(), Vec::new());
+    let materials: Vec<Value> = scene
+        .materials
+        .iter()
+        .map(|m| material_json(m, &mut bin, &mut images, &mut textures))
+        .collect();
     let mut root = json!({
         "asset": { "version": "2.0", "generator": "penumbra assets generator" },
         "scene": 0,
-        "materials": scene.materials.iter().map(material_json).collect::<Vec<_>>(),
+        "materials": materials,
         "meshes": meshes,
     });
+    if !images.is_empty() {
+        root["images"] = Value::Array(images);
+        root["textures"] = Value::Array(textures);
+    }
     if let Some(camera) = &scene.camera {
         let mut node = node_json("camera", &Placement::Matrix(camera.node_matrix()));
         node["camera"] = json!(0);
@@ -324,11 +391,13 @@ mod tests {
             materials: vec![Material {
                 name: "grey".into(),
                 base_color: [0.5, 0.5, 0.5, 1.0],
+                mask: None,
             }],
             objects: vec![
                 Object {
                     name: "box".into(),
                     mesh: shapes::box_on_ground(Vec3::new(1.0, 0.5, 0.1)),
+                    uvs: Vec::new(),
                     material: 0,
                     placement: Placement::Trs {
                         translation: Vec3::new(1.0, 0.0, -2.0),
@@ -339,6 +408,7 @@ mod tests {
                 Object {
                     name: "ball".into(),
                     mesh: shapes::uv_sphere(0.3, 6, 8),
+                    uvs: Vec::new(),
                     material: 0,
                     placement: Placement::Matrix(Mat4::from_translation(Vec3::Y * 0.3)),
                 },

@@ -51,6 +51,12 @@ pub const EMBEDDED_SCENES: &[EmbeddedScene] = &[
         glb: include_bytes!("../../assets/lattice.glb"),
         view_json: include_str!("../../assets/views/lattice.json"),
     },
+    EmbeddedScene {
+        name: "screen",
+        file_name: "screen.glb",
+        glb: include_bytes!("../../assets/screen.glb"),
+        view_json: include_str!("../../assets/views/screen.json"),
+    },
 ];
 
 /// The scene used when none is named: `playground`.

@@ -24,7 +24,7 @@ use std::time::{Duration, Instant};
 use glam::{Vec3, Vec3A};
 use obvhs::{BvhBuildParams, bvh2::builder::build_bvh2_from_tris, triangle::Triangle};
 
-use super::{BuildQuality, Bvh, BvhSettings};
+use super::{AlphaMasks, BuildQuality, Bvh, BvhSettings};
 use crate::contract::layout::{BvhNode, BvhTriangle};
 use crate::{Error, Result};
 
@@ -83,7 +83,7 @@ pub(super) fn build(corners: &[[Vec3; 3]], settings: &BvhSettings) -> Result<Bvh
                 v0: c[0],
                 scene_index: i,
                 v1: c[1],
-                pad1: 0,
+                alpha: crate::contract::alpha::OPAQUE,
                 v2: c[2],
                 pad2: 0,
             }
@@ -93,6 +93,7 @@ pub(super) fn build(corners: &[[Vec3; 3]], settings: &BvhSettings) -> Result<Bvh
         nodes,
         triangles,
         build_time: start.elapsed(),
+        alpha: AlphaMasks::default(),
     })
 }
 

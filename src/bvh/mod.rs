@@ -2,12 +2,14 @@
 //! sibling children adjacent and triangles reordered into leaf order, so the
 //! GPU reads leaves contiguously with no index indirection.
 
+mod alpha;
 mod build;
 mod refit;
 mod stats;
 
 use std::time::Duration;
 
+pub use alpha::AlphaMasks;
 pub use refit::{MERGE_GAP_BYTES, Refit, ranges};
 pub use stats::BvhStats;
 
@@ -60,13 +62,30 @@ pub struct Bvh {
     pub triangles: Vec<BvhTriangle>,
     /// Time spent building (obvhs build plus flattening).
     pub build_time: Duration,
+    /// The masks of alpha-tested triangles, which [`BvhTriangle::alpha`] points into
+    /// (empty for [`Bvh::build_from_corners`]).
+    pub alpha: AlphaMasks,
 }
 
 impl Bvh {
-    /// Builds a BVH over all triangles of `scene`.
+    /// Builds a BVH over all triangles of `scene`, with the masks of its alpha-tested
+    /// materials ([`AlphaMasks::build`]: their textures are decoded here).
     pub fn build(scene: &Scene, settings: &BvhSettings) -> Result<Bvh> {
         let corners: Vec<[glam::Vec3; 3]> = scene.triangles.iter().map(|t| t.positions).collect();
-        build::build(&corners, settings)
+        let mut bvh = build::build(&corners, settings)?;
+        bvh.alpha = AlphaMasks::build(scene, &mut bvh.triangles)?;
+        Ok(bvh)
+    }
+
+    /// The same BVH with every triangle opaque: what the scene would be if its masks were
+    /// ignored (`bench` compares the two).
+    pub fn without_alpha(&self) -> Bvh {
+        let mut bvh = self.clone();
+        for t in &mut bvh.triangles {
+            t.alpha = crate::contract::alpha::OPAQUE;
+        }
+        bvh.alpha = AlphaMasks::default();
+        bvh
     }
 
     /// Builds a BVH over triangles given by their corners (index = scene index).

@@ -40,8 +40,10 @@ pub struct BvhTriangle {
     pub scene_index: u32,
     /// Corner 1 (bytes 16..28).
     pub v1: Vec3,
-    /// Unused (bytes 28..32).
-    pub pad1: u32,
+    /// Where its [`AlphaTriangle`] is in the alpha words ([`crate::bvh::AlphaMasks`]),
+    /// [`crate::contract::alpha::OPAQUE`] for a triangle that always blocks: the kernels
+    /// look at this word only, so opaque triangles pay no other load (bytes 28..32).
+    pub alpha: u32,
     /// Corner 2 (bytes 32..44).
     pub v2: Vec3,
     /// Unused (bytes 44..48).
@@ -161,7 +163,7 @@ pub struct ShadingTriangle {
     pub pad3: [u32; 2],
 }
 
-/// One material as the primary pass reads it, 16 bytes (WGSL `GpuMaterial`).
+/// One material as the primary pass reads it, 32 bytes (WGSL `GpuMaterial`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuMaterial {
@@ -169,6 +171,47 @@ pub struct GpuMaterial {
     pub base_color: Vec3,
     /// Index of the base colour texture in the texture table, `u32::MAX` for none (bytes 12..16).
     pub texture: u32,
+    /// The base colour factor's alpha (bytes 16..20).
+    pub alpha_factor: f32,
+    /// A camera ray passes an alpha-tested triangle of this material where texel alpha ×
+    /// `alpha_factor` is below this (bytes 20..24); the kernels read it only for triangles
+    /// whose [`BvhTriangle::alpha`] is not [`crate::contract::alpha::OPAQUE`].
+    pub alpha_cutoff: f32,
+    /// Unused (bytes 24..32).
+    pub pad: [u32; 2],
+}
+
+/// The texture coordinates of one alpha-tested triangle and its mask, 32 bytes (WGSL
+/// `AlphaTriangle`), in the alpha words at [`BvhTriangle::alpha`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct AlphaTriangle {
+    /// TEXCOORD_0 at corner 0 (bytes 0..8).
+    pub uv0: glam::Vec2,
+    /// TEXCOORD_0 at corner 1 (bytes 8..16).
+    pub uv1: glam::Vec2,
+    /// TEXCOORD_0 at corner 2 (bytes 16..24).
+    pub uv2: glam::Vec2,
+    /// Word offset of its [`AlphaMask`] in the alpha words (bytes 24..28).
+    pub mask: u32,
+    /// Unused (bytes 28..32).
+    pub pad: u32,
+}
+
+/// One material's coverage, 16 bytes (WGSL `AlphaMask`): one bit per texel of its base
+/// colour texture (row-major, row 0 at v = 0), set where texel alpha × factor ≥ cutoff,
+/// i.e. where the surface is there and blocks rays.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct AlphaMask {
+    /// Width in texels (bytes 0..4).
+    pub width: u32,
+    /// Height in texels (bytes 4..8).
+    pub height: u32,
+    /// Word offset of the first bit word in the alpha words (bytes 8..12).
+    pub bits: u32,
+    /// Unused (bytes 12..16).
+    pub pad: u32,
 }
 
 /// Where one texture's texels are in the texel buffer, 16 bytes (WGSL `GpuTexture`).
@@ -314,7 +357,9 @@ const _: () = assert!(size_of::<ImageSize>() == 16);
 const _: () = assert!(size_of::<ShadeParams>() == 48);
 const _: () = assert!(size_of::<ShadingTriangle>() == 80);
 const _: () = assert!(size_of::<GpuTexture>() == 16);
-const _: () = assert!(size_of::<GpuMaterial>() == 16);
+const _: () = assert!(size_of::<GpuMaterial>() == 32);
+const _: () = assert!(size_of::<AlphaTriangle>() == 32);
+const _: () = assert!(size_of::<AlphaMask>() == 16);
 const _: () = assert!(size_of::<CameraParams>() == 80);
 const _: () = assert!(size_of::<BvhNode>() == 32);
 const _: () = assert!(size_of::<BvhTriangle>() == 48);
@@ -414,7 +459,7 @@ mod tests {
                 v0,
                 scene_index,
                 v1,
-                pad1,
+                alpha,
                 v2,
                 pad2
             }),
@@ -485,7 +530,36 @@ mod tests {
             LAYOUT_WGSL,
             "GpuMaterial",
             size_of::<GpuMaterial>(),
-            fields!(GpuMaterial { base_color, texture }),
+            fields!(GpuMaterial {
+                base_color,
+                texture,
+                alpha_factor,
+                alpha_cutoff,
+                pad
+            }),
+        );
+        check(
+            LAYOUT_WGSL,
+            "AlphaTriangle",
+            size_of::<AlphaTriangle>(),
+            fields!(AlphaTriangle {
+                uv0,
+                uv1,
+                uv2,
+                mask,
+                pad
+            }),
+        );
+        check(
+            LAYOUT_WGSL,
+            "AlphaMask",
+            size_of::<AlphaMask>(),
+            fields!(AlphaMask {
+                width,
+                height,
+                bits,
+                pad
+            }),
         );
         check(
             LAYOUT_WGSL,

@@ -1,12 +1,13 @@
 //! The contract between the GPU passes ([`crate::gpu`]) and their CPU twins
 //! ([`crate::reference`]): everything a kernel shares with Rust. Both sides take it from
-//! here and neither from the other. One file per shared WGSL module (`bvh`, `counters`,
+//! here and neither from the other. One file per shared WGSL module (`alpha`, `bvh`, `counters`,
 //! `groups`, `intersect`, `layout` — the `#[repr(C)]` structs —, `suspend`, and
 //! `filter` for `shared/filter_window`), one per kernel family for the uniform builders and
 //! the kernels' own constants (`primary`, `refine`, `shade`, `shadow`). Naga tests check
 //! the structs' layouts ([`layout`]) and every WGSL constant of every kernel variant
 //! against its Rust value (below).
 
+pub mod alpha;
 pub mod bvh;
 pub mod counters;
 pub mod filter;
@@ -36,6 +37,8 @@ mod tests {
         use naga::Literal::{F32, U32};
         let u = |v: usize| U32(v as u32);
         vec![
+            // shared/alpha
+            ("ALPHA_OPAQUE", U32(alpha::OPAQUE)),
             // shared/bvh, shared/bvh_vec16
             ("STACK_SIZE", u(bvh::STACK_SIZE)),
             ("NODE_WORDS", u(bvh::NODE_WORDS)),

@@ -46,6 +46,8 @@ pub struct SceneCounts {
     pub textures: u64,
     /// Texels of all textures together.
     pub texels: u64,
+    /// 32-bit words of the alpha masks ([`crate::bvh::AlphaMasks::words`]).
+    pub alpha_words: u64,
 }
 
 impl SceneCounts {
@@ -58,6 +60,7 @@ impl SceneCounts {
             materials: scene.materials.len() as u64,
             textures: scene.images.len() as u64,
             texels,
+            alpha_words: bvh.alpha.words.len() as u64,
         }
     }
 }
@@ -76,6 +79,7 @@ pub fn scene_buffers(c: &SceneCounts) -> Vec<BufferSize> {
         size("textures", c.textures, size_of::<GpuTexture>()),
         // At least one texel: a bindable buffer needs an element.
         size("texels", c.texels.max(1), 16),
+        size("alpha", c.alpha_words, 4),
     ]
 }
 
@@ -230,9 +234,10 @@ mod tests {
             materials: 1,
             textures: 0,
             texels: 0,
+            alpha_words: 8,
         };
         let bytes: Vec<u64> = scene_buffers(&c).iter().map(|b| b.bytes).collect();
-        assert_eq!(bytes, [96, 96, 160, 16, 16, 16]);
+        assert_eq!(bytes, [96, 96, 160, 32, 16, 16, 32]);
     }
 
     #[test]

@@ -31,10 +31,13 @@ pub struct RayQueryScene {
 impl RayQueryScene {
     /// Builds the structures over the first `count` triangles of `triangles` (an
     /// `array<BvhTriangle>` made with [`wgpu::BufferUsages::BLAS_INPUT`]) and waits for them.
+    /// `opaque`: no triangle is alpha-tested, so the geometry is marked opaque and a query
+    /// never stops at a candidate; else every hit is a candidate the kernel decides.
     pub(crate) fn new(
         ctx: &super::GpuContext,
         triangles: &wgpu::Buffer,
         count: u32,
+        opaque: bool,
     ) -> Result<RayQueryScene> {
         let flags = wgpu::AccelerationStructureFlags::PREFER_FAST_TRACE;
         let vertex_count = count.checked_mul(3).ok_or_else(|| {
@@ -48,7 +51,11 @@ impl RayQueryScene {
                 vertex_count,
                 index_format: None,
                 index_count: None,
-                flags: wgpu::AccelerationStructureGeometryFlags::OPAQUE,
+                flags: if opaque {
+                    wgpu::AccelerationStructureGeometryFlags::OPAQUE
+                } else {
+                    wgpu::AccelerationStructureGeometryFlags::empty()
+                },
             };
             let blas = ctx.device.create_blas(
                 &wgpu::CreateBlasDescriptor {

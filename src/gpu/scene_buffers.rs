@@ -28,6 +28,10 @@ pub struct GpuScene {
     pub textures: wgpu::Buffer,
     /// `array<vec4<f32>>`: linear RGBA texels of all textures.
     pub texels: wgpu::Buffer,
+    /// `array<u32>`: the alpha words ([`crate::bvh::AlphaMasks`]) the shadow kernels read.
+    pub alpha: wgpu::Buffer,
+    /// Triangles whose alpha is tested ([`crate::bvh::AlphaMasks::triangles`]).
+    pub alpha_triangles: usize,
     /// Length of the scene's bounding-box diagonal (for relative offsets).
     pub diagonal: f32,
     /// The world point the BVH buffers are relative to: the centre of a scene that lies
@@ -145,7 +149,12 @@ impl GpuScene {
         let ray_query = if ray_query {
             let count = u32::try_from(bvh.triangles.len())
                 .map_err(|_| Error::Bvh("more than 2^32 triangles".into()))?;
-            Some(super::RayQueryScene::new(ctx, &triangles, count)?)
+            Some(super::RayQueryScene::new(
+                ctx,
+                &triangles,
+                count,
+                bvh.alpha.triangles == 0,
+            )?)
         } else {
             None
         };
@@ -156,6 +165,8 @@ impl GpuScene {
             materials: storage_buffer(ctx, "materials", &shading.materials, usage)?,
             textures: storage_buffer(ctx, "textures", &shading.textures, usage)?,
             texels: storage_buffer(ctx, "texels", &shading.texels, usage)?,
+            alpha: storage_buffer(ctx, "alpha", &bvh.alpha.words, usage)?,
+            alpha_triangles: bvh.alpha.triangles,
             diagonal: scene.bounds().diagonal(),
             origin,
             motion: None,

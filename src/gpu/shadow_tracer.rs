@@ -207,6 +207,8 @@ impl ShadowTracer {
                     buffer("gbuffer", image.gbuffer),
                     buffer("light_points", image.light_points),
                     buffer("masks", image.masks),
+                    buffer("triangles", &scene.triangles),
+                    buffer("alpha", &scene.alpha),
                 ],
             );
         }
@@ -221,6 +223,7 @@ impl ShadowTracer {
                 buffer("masks", image.masks),
                 buffer("state", &scratch.state),
                 buffer("status", &scratch.status),
+                buffer("alpha", &scene.alpha),
             ],
         )
     }

@@ -223,7 +223,9 @@ fn clip_far(verts: &[DVec3; 3], g: impl Fn(DVec3) -> f64) -> Vec<DVec3> {
 }
 
 /// Visible fraction (0..=1) of `light` from the texel's shadow-ray origin,
-/// exactly (see the [module docs](self)); `None` for a sky pixel.
+/// exactly (see the [module docs](self)); `None` for a sky pixel. Every triangle is a
+/// whole polygon here: alpha masks are not applied (the image functions refuse a BVH
+/// that has alpha-tested triangles).
 pub fn exact_visibility(bvh: &Bvh, texel: &GBufferTexel, light: &QuadLight) -> Option<f32> {
     if !texel.is_hit() {
         return None;
@@ -321,6 +323,11 @@ pub struct ExactImageOptions<'a> {
 
 /// Exact visibility of every pixel of a row-major G-buffer, rows spread over
 /// all cores; sky pixels get 1 (as [`super::visibility::visibility`] gives them).
+///
+/// # Panics
+///
+/// When the BVH has alpha-tested triangles ([`exact_visibility_image_with`] returns
+/// that as an error).
 pub fn exact_visibility_image(
     bvh: &Bvh,
     gbuffer: &[GBufferTexel],
@@ -329,14 +336,15 @@ pub fn exact_visibility_image(
     light: &QuadLight,
 ) -> Vec<f32> {
     exact_visibility_image_with(bvh, gbuffer, width, height, light, &ExactImageOptions::default())
-        .expect("no budget, so no time-out")
+        .expect("no budget, so no time-out (and a BVH with alpha-tested triangles is a caller's bug)")
 }
 
 /// [`exact_visibility_image`] with a time budget and a progress callback.
 ///
 /// # Errors
 ///
-/// [`Error::TimeBudget`] when `options.budget` runs out first.
+/// [`Error::TimeBudget`] when `options.budget` runs out first; [`Error::InvalidInput`]
+/// when the BVH has alpha-tested triangles, whose holes polygons do not describe.
 ///
 /// # Panics
 ///
@@ -355,6 +363,16 @@ pub fn exact_visibility_image_with(
         width * height,
         "G-buffer size does not match the image size"
     );
+    if bvh.alpha.triangles > 0 {
+        return Err(Error::invalid(
+            "exact visibility",
+            format!(
+                "the scene has {} alpha-tested triangles, whose masks it cannot clip; \
+                 use the 256-ray reference tracer",
+                bvh.alpha.triangles
+            ),
+        ));
+    }
     let start = Instant::now();
     let deadline = options.budget.map(|b| start + b);
     let out_of_time = AtomicBool::new(false);

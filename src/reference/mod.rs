@@ -24,4 +24,4 @@ mod traverse;
 pub mod visibility;
 
 pub use intersect::{RayBox, intersect_box, intersect_triangle, safe_inverse};
-pub use traverse::{Hit, any_hit, closest_hit, closest_hit_counted};
+pub use traverse::{Hit, any_hit, closest_hit, closest_hit_counted, intersect_surface};

@@ -16,7 +16,7 @@ use glam::Vec3;
 
 use super::descend::descend;
 use super::primary::hit_texel;
-use super::{Hit, intersect_triangle};
+use super::{Hit, intersect_surface};
 use crate::bvh::Bvh;
 use crate::contract::counters::Counters;
 use crate::contract::layout::{BvhNode, BvhTriangle, CameraParams, GBufferTexel};
@@ -152,9 +152,9 @@ impl PixelFrustum {
     }
 
     /// The 16 rays against triangle `ix`, each exactly as the per-ray tracer tests it.
-    fn test_rays(&mut self, cam: &CameraParams, tri: &BvhTriangle, ix: u32) {
+    fn test_rays(&mut self, bvh: &Bvh, cam: &CameraParams, tri: &BvhTriangle, ix: u32) {
         for k in 0..16 {
-            if let Some((t, u, v)) = intersect_triangle(tri, cam.eye, self.dirs[k], self.t[k]) {
+            if let Some((t, u, v)) = intersect_surface(bvh, tri, cam.eye, self.dirs[k], self.t[k]) {
                 self.t[k] = t;
                 self.best[k] = Vec3::new(t, u, v);
                 self.tri[k] = ix;
@@ -245,7 +245,7 @@ pub fn trace_block(
             for (i, f) in frusta.iter_mut().enumerate() {
                 if mask & (1 << i) != 0 && !f.culls_triangle(cam, tri) {
                     survivors |= 1 << i;
-                    f.test_rays(cam, tri, cursor);
+                    f.test_rays(bvh, cam, tri, cursor);
                 }
             }
             counters.triangles_accessed += 1;

@@ -16,7 +16,7 @@ use glam::{Vec2, Vec3};
 
 use super::descend::descend;
 use super::shadow_per_ray::{initial_mask, light_corners};
-use crate::bvh::Bvh;
+use crate::bvh::{AlphaMasks, Bvh};
 use crate::contract::bvh::STACK_SIZE;
 use crate::contract::layout::{BvhNode, BvhTriangle, GBufferTexel, MASK_FULL, MASK_SKY, ShadowParams};
 use crate::contract::shadow::{
@@ -225,7 +225,15 @@ pub enum TriangleOutcome {
 /// s·eu + t·ev` each `m_e·(p − origin)` is an edge function `a + b·s + c·t` of
 /// the sample's light coordinates: three dot products per edge and triangle,
 /// then two multiply-adds per edge and ray.
-pub fn frustum_test_triangle(f: &Frustum, tri: &BvhTriangle, params: &ShadowParams) -> TriangleOutcome {
+///
+/// The hit bits of an alpha-tested triangle leave out the rays its mask lets pass
+/// ([`AlphaMasks::passes`] at [`EdgeFunctions::weights`]).
+pub fn frustum_test_triangle(
+    f: &Frustum,
+    tri: &BvhTriangle,
+    params: &ShadowParams,
+    alpha: &AlphaMasks,
+) -> TriangleOutcome {
     let o = f.origin;
     let (v0, v1, v2) = (tri.v0, tri.v1, tri.v2);
     let (a0, a1, a2) = (v0 - o, v1 - o, v2 - o);
@@ -269,7 +277,7 @@ pub fn frustum_test_triangle(f: &Frustum, tri: &BvhTriangle, params: &ShadowPara
     let hits =
         f.st.iter()
             .enumerate()
-            .filter(|(_, st)| e.hit(**st, params.t_max))
+            .filter(|(_, st)| e.hit(**st, params.t_max) && !alpha.passes(tri, e.weights(**st)))
             .fold(0u32, |m, (j, _)| m | 1 << j);
     TriangleOutcome::Tested(hits)
 }
@@ -302,6 +310,14 @@ impl EdgeFunctions {
 
     fn at(&self, st: Vec2) -> Vec3 {
         self.a + self.b * st.x + self.c * st.y
+    }
+
+    /// The barycentric weights (corners 0, 1, 2) where the ray to light coordinates `st`
+    /// meets the triangle's plane: edge function `k` is opposite corner `k + 2`.
+    fn weights(&self, st: Vec2) -> [f32; 3] {
+        let v = self.at(st);
+        let inv = 1.0 / (v.x + v.y + v.z);
+        [v.y * inv, v.z * inv, v.x * inv]
     }
 
     /// The ray to light coordinates `st` hits the triangle before `t_max`.
@@ -425,7 +441,7 @@ fn leaf_triangle(
     let mut hits = [0u32; 16];
     for (i, f) in frusta.iter().enumerate() {
         if st.leaf_mask & (1 << i) != 0 && !f.is_done() {
-            if let TriangleOutcome::Tested(h) = frustum_test_triangle(f, tri, params) {
+            if let TriangleOutcome::Tested(h) = frustum_test_triangle(f, tri, params, &bvh.alpha) {
                 survived |= 1 << i;
                 hits[i] = h;
             }
@@ -636,7 +652,7 @@ pub fn dispatch_tile(
                 // The kernel reloads the triangle and tests the candidates left.
                 let tri = &bvh.triangles[st.cursor as usize - 1];
                 for (i, f) in frusta.iter().enumerate().filter(|(i, _)| cand & (1 << i) != 0) {
-                    if let TriangleOutcome::Tested(h) = frustum_test_triangle(f, tri, params) {
+                    if let TriangleOutcome::Tested(h) = frustum_test_triangle(f, tri, params, &bvh.alpha) {
                         cand_hits[i] = h;
                     }
                 }

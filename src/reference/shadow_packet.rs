@@ -12,7 +12,7 @@ use glam::Vec3;
 use super::counters::Counters;
 use super::descend::descend;
 use super::shadow_per_ray::initial_mask;
-use super::{RayBox, intersect_box, intersect_triangle, safe_inverse};
+use super::{RayBox, intersect_box, intersect_surface, safe_inverse};
 use crate::bvh::Bvh;
 use crate::contract::bvh::STACK_SIZE;
 use crate::contract::layout::MASK_SKY;
@@ -82,7 +82,7 @@ pub fn trace_packet(
             let active = mask & alive;
             let hits = ballot(&|j| {
                 active & (1 << j) != 0
-                    && intersect_triangle(tri, texel.origin, dirs[j], params.t_max).is_some()
+                    && intersect_surface(bvh, tri, texel.origin, dirs[j], params.t_max).is_some()
             });
             blocked |= hits;
             alive &= !hits;

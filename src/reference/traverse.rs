@@ -6,6 +6,7 @@ use glam::Vec3;
 use super::intersect::{RayBox, intersect_box, intersect_triangle, safe_inverse};
 use crate::bvh::Bvh;
 use crate::contract::counters::Counters;
+use crate::contract::layout::BvhTriangle;
 
 /// The nearest intersection along a ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -18,6 +19,20 @@ pub struct Hit {
     pub u: f32,
     /// Barycentric weight of corner 2.
     pub v: f32,
+}
+
+/// Möller–Trumbore's hit `(t, u, v)` of `tri` with `0 < t < t_max` where the surface is
+/// there: not where an alpha-tested triangle's mask lets the ray pass
+/// ([`crate::bvh::AlphaMasks::passes`]). What every per-ray test of the kernels computes.
+pub fn intersect_surface(
+    bvh: &Bvh,
+    tri: &BvhTriangle,
+    origin: Vec3,
+    dir: Vec3,
+    t_max: f32,
+) -> Option<(f32, f32, f32)> {
+    intersect_triangle(tri, origin, dir, t_max)
+        .filter(|&(_, u, v)| !bvh.alpha.passes(tri, [1.0 - u - v, u, v]))
 }
 
 /// The nearest hit with `0 < t < t_max`, or `None`. Children are visited
@@ -54,7 +69,8 @@ pub fn closest_hit_counted(
                 counters.triangles_accessed += 1;
                 counters.triangles_after_culling += 1;
                 counters.triangle_tests += 1;
-                if let Some((t, u, v)) = intersect_triangle(&bvh.triangles[ix as usize], origin, dir, t_best)
+                if let Some((t, u, v)) =
+                    intersect_surface(bvh, &bvh.triangles[ix as usize], origin, dir, t_best)
                 {
                     t_best = t;
                     best = Some(Hit {
@@ -104,7 +120,7 @@ pub fn any_hit(bvh: &Bvh, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
             let tris = &bvh.triangles[node.first as usize..(node.first + node.count) as usize];
             if tris
                 .iter()
-                .any(|t| intersect_triangle(t, origin, dir, t_max).is_some())
+                .any(|t| intersect_surface(bvh, t, origin, dir, t_max).is_some())
             {
                 return true;
             }

@@ -61,7 +61,7 @@ pub(super) fn import(bytes: &[u8], path: &Path) -> Result<Scene, String> {
         .ok_or("the file defines no scene")?;
 
     let mut builder = Builder {
-        materials: doc.materials().map(|m| material(&m)).collect(),
+        materials: doc.materials().map(|m| material(&m)).collect::<Result<_, _>>()?,
         default_material: None,
         triangles: Vec::new(),
         instances: Vec::new(),
@@ -348,9 +348,20 @@ fn triangle_corners(mode: Mode, ix: &[u32]) -> Vec<[u32; 3]> {
     }
 }
 
-fn material(m: &gltf::Material) -> Material {
+/// The material, or why it cannot be used: an `alphaCutoff` that is not a finite number
+/// ≥ 0 (glTF 2.0 §5.19 asks for one; a NaN or negative cutoff would silently make the
+/// mask all surface or all hole).
+fn material(m: &gltf::Material) -> Result<Material, String> {
     let pbr = m.pbr_metallic_roughness();
-    Material {
+    let alpha_cutoff = m.alpha_cutoff().unwrap_or(0.5);
+    if !(alpha_cutoff.is_finite() && alpha_cutoff >= 0.0) {
+        let name = m.name().map(|n| format!(" '{n}'")).unwrap_or_default();
+        return Err(format!(
+            "material {}{name} has alphaCutoff {alpha_cutoff}; it must be a finite number >= 0",
+            m.index().map_or("default".to_owned(), |i| i.to_string())
+        ));
+    }
+    Ok(Material {
         name: m.name().map(str::to_owned),
         base_color_factor: pbr.base_color_factor(),
         base_color_texture: pbr
@@ -361,10 +372,10 @@ fn material(m: &gltf::Material) -> Material {
             gltf::material::AlphaMode::Mask => AlphaMode::Mask,
             gltf::material::AlphaMode::Blend => AlphaMode::Blend,
         },
-        alpha_cutoff: m.alpha_cutoff().unwrap_or(0.5),
+        alpha_cutoff,
         double_sided: m.double_sided(),
         emissive: (Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0)).to_array(),
-    }
+    })
 }
 
 fn image_source(

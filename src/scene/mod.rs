@@ -37,9 +37,12 @@ pub struct SceneTriangle {
 pub enum AlphaMode {
     /// Alpha is ignored.
     Opaque,
-    /// Alpha below the cutoff makes the surface absent.
+    /// Alpha below the cutoff makes the surface absent, for camera and shadow rays alike.
     Mask,
-    /// Alpha blends; shadows treat such surfaces as opaque.
+    /// Alpha blends. Rays treat it as [`AlphaMode::Mask`] at
+    /// [`crate::contract::alpha::BLEND_ALPHA_CUTOFF`] (0.05), the cutoff Bevy's shadow and
+    /// depth passes discard blended surfaces at: nearly clear texels let light through,
+    /// the rest block it (a ray is blocked or not; there is no partial transmission).
     Blend,
 }
 
@@ -54,7 +57,7 @@ pub struct Material {
     pub base_color_texture: Option<u32>,
     /// Alpha mode.
     pub alpha_mode: AlphaMode,
-    /// Alpha cutoff for [`AlphaMode::Mask`].
+    /// Alpha cutoff for [`AlphaMode::Mask`]: a finite number ≥ 0 (the loader refuses others).
     pub alpha_cutoff: f32,
     /// Whether back faces are shaded as front faces.
     pub double_sided: bool,

@@ -634,3 +634,33 @@ fn inputs_that_crashed_the_fuzzer_are_errors() {
         }
     }
 }
+
+/// An `alphaCutoff` that is not a finite number ≥ 0 is refused, naming the file and the
+/// material: negative (which the JSON can say) or beyond f32 (1e999, which f32 reads as ∞).
+#[test]
+fn alpha_cutoff_that_is_not_a_finite_number_is_an_error() {
+    let mut file = TestFile::quad();
+    file.json["materials"] = json!([{"name": "leaves", "alphaMode": "MASK", "alphaCutoff": -0.5}]);
+    file.primitive()["material"] = json!(0);
+    assert_error(
+        load_glb(&file.glb()),
+        "test.glb",
+        "material 0 'leaves' has alphaCutoff -0.5",
+    );
+    file.json["materials"][0]["alphaCutoff"] = json!(12345.0);
+    let text = String::from_utf8(file.gltf_data_uri())
+        .unwrap()
+        .replace("12345.0", "1e999");
+    let path = test_dir("alpha_cutoff").join("infinite.gltf");
+    std::fs::write(&path, text).unwrap();
+    match Scene::load(&path) {
+        Ok(_) => panic!("alphaCutoff 1e999 loaded"),
+        Err(e) => {
+            let msg = e.to_string();
+            assert!(
+                msg.contains("infinite.gltf") && msg.contains("out of range"),
+                "{msg}"
+            );
+        }
+    }
+}

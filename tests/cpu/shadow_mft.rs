@@ -99,7 +99,9 @@ fn mft_twin_matches_per_ray_oracle_on_generated_scenes() {
 /// kernel's.)
 #[test]
 fn suspending_and_resuming_keeps_the_masks_and_the_work() {
-    for s in assets::EMBEDDED_SCENES {
+    // Not the screen: its tiles finish in two or three steps (one leaf of two triangles
+    // over a ground their frusta cull), so no budget cuts them often.
+    for s in assets::EMBEDDED_SCENES.iter().filter(|s| s.name != "screen") {
         let Case {
             bvh,
             gbuffer,

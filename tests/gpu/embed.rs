@@ -287,7 +287,7 @@ fn a_device_without_the_required_limits_or_features_gets_the_documented_error() 
             assert!(
                 missing
                     .iter()
-                    .any(|m| m.starts_with("max_storage_buffers_per_shader_stage 4 (needs 7)")),
+                    .any(|m| m.starts_with("max_storage_buffers_per_shader_stage 4 (needs 8)")),
                 "{missing:?}"
             );
         }

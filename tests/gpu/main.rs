@@ -3,6 +3,7 @@
 #[path = "../support/mod.rs"]
 mod support;
 
+mod alpha;
 mod determinism;
 mod embed;
 mod far_from_origin;

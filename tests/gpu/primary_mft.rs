@@ -54,7 +54,7 @@ impl Case {
 fn cases() -> Vec<Case> {
     let mut out = Vec::new();
     for size in [(37, 23), (64, 64)] {
-        for name in ["playground", "lattice"] {
+        for name in ["playground", "lattice", "screen"] {
             let (scene, view) = embedded(name);
             out.push(Case::new(
                 name,

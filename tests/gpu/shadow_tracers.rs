@@ -20,7 +20,8 @@ use penumbra::scene::Scene;
 use penumbra::scene::view::{QuadLight, View};
 use penumbra::{assets, sampling};
 use support::gpu::{
-    assert_same_rays, ctx, embedded, exact_arithmetic, trace_masks, try_trace_masks, variants,
+    assert_same_rays, ctx, embedded, every_tracer, exact_arithmetic, shadow_tracer, trace_masks,
+    try_trace_masks, variants,
 };
 use support::{
     assert_masks_match_oracle, closed_room, near_miss_column, rays_through_a_shared_edge,
@@ -364,29 +365,6 @@ fn counters_match_hand_counts() {
             }
         }
     }
-}
-
-/// Every shadow tracer configuration a test runs: MFT with both leaf modes, packet and
-/// per-ray, each vector tracer in every variant this adapter has.
-fn every_tracer() -> Vec<(Tracer, LeafMode, VectorVariant)> {
-    let mut out = vec![(Tracer::PerRay, LeafMode::PerLane, VectorVariant::Workgroup)];
-    for variant in variants() {
-        out.push((Tracer::Mft, LeafMode::PerLane, variant));
-        out.push((Tracer::Mft, LeafMode::Transposed, variant));
-        out.push((Tracer::Packet, LeafMode::PerLane, variant));
-    }
-    out
-}
-
-/// The shadow pass of one tracer, leaf mode and vector variant, otherwise by default.
-fn shadow_tracer(tracer: Tracer, leaf_mode: LeafMode, variant: VectorVariant) -> ShadowTracer {
-    let options = TracerOptions {
-        tracer,
-        variant: Some(variant),
-        leaf_mode,
-        ..TracerOptions::default()
-    };
-    ShadowTracer::new(ctx(), &options).unwrap()
 }
 
 /// A 4×4 tile of ground points within 0.0075 of the origin (the ray offset above it)

@@ -4,7 +4,7 @@
 use std::path::Path;
 use std::sync::OnceLock;
 
-use penumbra::gpu::{GpuContext, GpuOptions, VectorVariant};
+use penumbra::gpu::{GpuContext, GpuOptions, LeafMode, ShadowTracer, Tracer, TracerOptions, VectorVariant};
 use penumbra::{assets, scene::Scene, scene::view::View};
 
 /// One context per test binary; a missing adapter fails every test with the reason.
@@ -166,4 +166,29 @@ pub fn assert_same_rays(
         c.unexplained.is_empty() && c.differing * 1000 <= c.total,
         "{label}: {c}"
     );
+}
+
+/// Every shadow tracer configuration a test runs: MFT with both leaf modes, packet and
+/// per-ray, each vector tracer in every variant this adapter has.
+#[allow(dead_code)]
+pub fn every_tracer() -> Vec<(Tracer, LeafMode, VectorVariant)> {
+    let mut out = vec![(Tracer::PerRay, LeafMode::PerLane, VectorVariant::Workgroup)];
+    for variant in variants() {
+        out.push((Tracer::Mft, LeafMode::PerLane, variant));
+        out.push((Tracer::Mft, LeafMode::Transposed, variant));
+        out.push((Tracer::Packet, LeafMode::PerLane, variant));
+    }
+    out
+}
+
+/// The shadow pass of one tracer, leaf mode and vector variant, otherwise by default.
+#[allow(dead_code)]
+pub fn shadow_tracer(tracer: Tracer, leaf_mode: LeafMode, variant: VectorVariant) -> ShadowTracer {
+    let options = TracerOptions {
+        tracer,
+        variant: Some(variant),
+        leaf_mode,
+        ..TracerOptions::default()
+    };
+    ShadowTracer::new(ctx(), &options).unwrap()
 }

@@ -130,7 +130,8 @@ impl ShadowPass {
 
     /// Limits the device must have: small, every WebGPU device's defaults
     /// ([`wgpu::Limits::default`]) exceed them; `downlevel_defaults` (4 storage buffers
-    /// per stage) do not. The shadow kernel binds 7 storage buffers; the per-pixel kernels
+    /// per stage) do not. The shadow kernel binds 8 storage buffers (the maximum WebGPU
+    /// guarantees; the 8th holds the alpha masks) and 9 bindings; the per-pixel kernels
     /// read 3 textures and write one storage texture; workgroups are at most 64
     /// invocations (8×8, or 4 subgroup vectors of 16) with under 2 KiB of workgroup
     /// memory; a dispatch has at most 128×128 workgroups along x. Storage bindings of
@@ -140,8 +141,8 @@ impl ShadowPass {
     /// report [`Error::BufferTooLarge`]).
     pub fn required_limits() -> wgpu::Limits {
         wgpu::Limits {
-            max_bindings_per_bind_group: 8,
-            max_storage_buffers_per_shader_stage: 7,
+            max_bindings_per_bind_group: 9,
+            max_storage_buffers_per_shader_stage: 8,
             max_sampled_textures_per_shader_stage: 3,
             max_storage_textures_per_shader_stage: 1,
             max_storage_buffer_binding_size: 128 << 20,
