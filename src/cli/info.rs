@@ -92,6 +92,12 @@ pub fn run(args: &InfoArgs) -> penumbra::Result<()> {
     println!("  max depth  {}", stats.max_depth);
     println!("  SAH cost   {:.2}", stats.sah_cost);
     println!("  GPU bytes  {} (nodes + triangles)", stats.gpu_bytes);
+    println!(
+        "  alpha      {} alpha-tested triangle(s) (MASK, or BLEND at cutoff {}), {} word(s) of masks",
+        bvh.alpha.triangles,
+        penumbra::contract::alpha::BLEND_ALPHA_CUTOFF,
+        bvh.alpha.words.len()
+    );
     print_memory(&scene, &bvh, args.size);
     Ok(())
 }

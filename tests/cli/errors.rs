@@ -46,6 +46,43 @@ fn info_on_each_builtin_scene_by_name() {
     }
 }
 
+/// `info` counts the alpha-tested triangles (the screen's two; none in the playground),
+/// and exact visibility, which clips polygons, refuses a scene with masks in one line.
+#[test]
+fn alpha_masks_are_counted_and_refused_where_they_cannot_be_traced() {
+    let out = penumbra(&["info", "screen"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stdout).contains("alpha      2 alpha-tested triangle(s)"),
+        "{}",
+        text(&out.stdout)
+    );
+    let out = penumbra(&["info"]);
+    assert!(
+        text(&out.stdout).contains("alpha      0 alpha-tested triangle(s)"),
+        "{}",
+        text(&out.stdout)
+    );
+    let out = penumbra(&[
+        "render",
+        "screen",
+        "--tracer",
+        "exact",
+        "--size",
+        "8x8",
+        "-o",
+        "exact.exr",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("2 alpha-tested triangles") && stderr.contains("reference"),
+        "{stderr}"
+    );
+    assert!(!Path::new(env!("CARGO_TARGET_TMPDIR")).join("exact.exr").exists());
+}
+
 #[test]
 fn missing_file_is_one_line_and_exit_1() {
     let out = penumbra(&["info", "/no/such/scene.glb"]);

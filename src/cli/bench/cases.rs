@@ -1,10 +1,11 @@
 //! The scenes and views `penumbra bench` measures: the built-in scenes and those of
-//! `../shared/scenes/` with their views.
+//! `../shared/scenes/` with their views; a scene with alpha-tested materials also with its
+//! masks ignored (`VIEW, masks opaque`), just before it, so the table shows what they cost.
 
 use std::path::{Path, PathBuf};
 
-use penumbra::scene::Scene;
 use penumbra::scene::view::{View, ViewFile};
+use penumbra::scene::{AlphaMode, Scene};
 use penumbra::{Result, assets};
 
 use super::BenchArgs;
@@ -50,6 +51,9 @@ pub(super) struct Case {
     pub(super) view_name: String,
     pub(super) scene: Scene,
     pub(super) view: View,
+    /// Trace the scene with its alpha masks ignored ([`penumbra::bvh::Bvh::without_alpha`]):
+    /// the case after a scene with alpha-tested materials, to show what the masks cost.
+    pub(super) opaque_masks: bool,
 }
 
 pub(super) fn cases(args: &BenchArgs) -> Result<Vec<Case>> {
@@ -86,11 +90,22 @@ pub(super) fn cases(args: &BenchArgs) -> Result<Vec<Case>> {
             // As render does (scene_arg::load_scene_and_view): far scenes are traced at the origin.
             let mut view = view;
             super::super::scene_arg::recentre(&mut scene, &mut view);
+            let masked = scene.materials.iter().any(|m| m.alpha_mode != AlphaMode::Opaque);
+            if masked {
+                out.push(Case {
+                    name: name.clone(),
+                    view_name: format!("{view_name}, masks opaque"),
+                    scene: scene.clone(),
+                    view,
+                    opaque_masks: true,
+                });
+            }
             out.push(Case {
                 name: name.clone(),
                 view_name,
                 scene,
                 view,
+                opaque_masks: false,
             });
         }
     };

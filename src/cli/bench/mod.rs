@@ -189,6 +189,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 ..args.bvh.settings()
             };
             let bvh = Bvh::build(&case.scene, &settings)?;
+            let bvh = if case.opaque_masks {
+                bvh.without_alpha()
+            } else {
+                bvh
+            };
             let gpu_scene = GpuScene::new(&ctx, &case.scene, &bvh)?;
             // Made only on a device with ray queries (asked for when ray-query is benched).
             let ray_query_build_ms = gpu_scene.ray_query.as_ref().map(|rq| rq.build_ms);
