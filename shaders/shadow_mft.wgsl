@@ -371,7 +371,7 @@ fn test_triangle(tri: BvhTriangle) -> u32 {
         | ray_bit(4u, e) | ray_bit(5u, e) | ray_bit(6u, e) | ray_bit(7u, e)
         | ray_bit(8u, e) | ray_bit(9u, e) | ray_bit(10u, e) | ray_bit(11u, e)
         | ray_bit(12u, e) | ray_bit(13u, e) | ray_bit(14u, e) | ray_bit(15u, e);
-    if tri.alpha != ALPHA_OPAQUE && bits != 0u {
+    if ALPHA_TEST && tri.alpha != ALPHA_OPAQUE && bits != 0u {
         bits &= ~(passed_bit(0u, tri.alpha, e, bits) | passed_bit(1u, tri.alpha, e, bits)
             | passed_bit(2u, tri.alpha, e, bits) | passed_bit(3u, tri.alpha, e, bits)
             | passed_bit(4u, tri.alpha, e, bits) | passed_bit(5u, tri.alpha, e, bits)
@@ -409,7 +409,7 @@ fn transposed_ray_hits(tri: BvhTriangle, f: u32) -> bool {
     let e = edge_functions(w, o);
     let st = point_st(light_points[f * 16u + g_lane].xyz, light_frame());
     let hit = (w.d != 0.0) & st_hit(e, st);
-    if hit && tri.alpha != ALPHA_OPAQUE {
+    if ALPHA_TEST && hit && tri.alpha != ALPHA_OPAQUE {
         return !alpha_passes(tri.alpha, st_weights(e, st));
     }
     return hit;

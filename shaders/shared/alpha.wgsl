@@ -4,10 +4,11 @@
 // Twin: AlphaMasks::passes.
 
 // Whether a ray passes the triangle whose BvhTriangle.alpha is `record` at the point with
-// barycentric weights `w` (corners 0, 1, 2): never for ALPHA_OPAQUE, else where the mask
-// bit of the texel nearest to the interpolated texture coordinate is clear.
+// barycentric weights `w` (corners 0, 1, 2): never for ALPHA_OPAQUE (nor in a build
+// without ALPHA_TEST), else where the mask bit of the texel nearest to the interpolated
+// texture coordinate is clear.
 fn alpha_passes(record: u32, w: vec3<f32>) -> bool {
-    if record == ALPHA_OPAQUE {
+    if !ALPHA_TEST || record == ALPHA_OPAQUE {
         return false;
     }
     let uv0 = vec2<f32>(bitcast<f32>(alpha[record]), bitcast<f32>(alpha[record + 1u]));

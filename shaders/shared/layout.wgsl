@@ -77,6 +77,9 @@ struct AlphaMask {
 
 // BvhTriangle.alpha of a triangle that always blocks (contract::alpha::OPAQUE).
 const ALPHA_OPAQUE: u32 = 0u;
+// Whether the tracing kernels test alpha masks at all: false for scenes without
+// alpha-tested triangles, so that the driver drops the test's code (gpu::AlphaKernels).
+override ALPHA_TEST: bool = false;
 
 // The texel nearest to `uv` (coordinates wrap), row-major; twin of contract::alpha::texel_index.
 fn texel_index(width: u32, height: u32, uv: vec2<f32>) -> u32 {

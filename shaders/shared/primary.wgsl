@@ -40,7 +40,7 @@ fn albedo(material: GpuMaterial, uv: vec2<f32>) -> vec3<f32> {
 // cutoff. The texels and materials are the shading's; the shadow kernels' bits
 // (shared/alpha) are made from the same numbers. Twin: AlphaMasks::passes.
 fn passes_alpha(tri: BvhTriangle, ix: u32, h: vec3<f32>) -> bool {
-    if tri.alpha == ALPHA_OPAQUE {
+    if !ALPHA_TEST || tri.alpha == ALPHA_OPAQUE {
         return false;
     }
     let sh = shading[ix];

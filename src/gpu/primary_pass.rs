@@ -14,7 +14,7 @@
 //! ends any other way (the driver ended it: a budget above its limit) is counted
 //! in status word [`WORD_LOOP_CUT`] and is an [`Error::LoopCut`].
 
-use super::kernel::{Checks, Kernel, buffer, uniform_buffer};
+use super::kernel::{AlphaKernels, Checks, buffer, uniform_buffer};
 use super::{GpuContext, GpuScene, GpuTimer, VectorVariant, read_buffer};
 use crate::contract::ITERATION_BUDGET;
 use crate::contract::counters::{Counters, STATUS_WORDS, WORD_LOOP_CUT, WORD_STATUS};
@@ -120,7 +120,7 @@ impl Default for PrimaryOptions {
 /// The primary pass's pipeline for one tracer.
 #[derive(Debug)]
 pub struct PrimaryPass {
-    kernel: Kernel,
+    kernel: AlphaKernels,
     tracer: PrimaryTracer,
     variant: Option<VectorVariant>,
     vectors_per_workgroup: u32,
@@ -156,7 +156,7 @@ impl PrimaryPass {
                 ("primary_mft", variant.aliases(), Some(variant), per_wg)
             }
         };
-        let kernel = Kernel::new(
+        let kernel = AlphaKernels::new(
             ctx,
             name,
             aliases,
@@ -242,7 +242,8 @@ impl PrimaryPass {
         timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) -> Result<()> {
         encoder.clear_buffer(status, 0, None);
-        let bind = self.kernel.bind(
+        let kernel = self.kernel.for_scene(scene)?;
+        let bind = kernel.bind(
             device,
             &[
                 buffer("camera", camera),
@@ -256,8 +257,7 @@ impl PrimaryPass {
                 buffer("texels", &scene.texels),
             ],
         )?;
-        self.kernel
-            .record(encoder, "primary", &bind, timestamp_writes, groups);
+        kernel.record(encoder, "primary", &bind, timestamp_writes, groups);
         Ok(())
     }
 

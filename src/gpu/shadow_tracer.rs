@@ -9,7 +9,7 @@
 //! A loop that ends any other way (a budget above the driver's limit) is counted
 //! in the status word [`WORD_LOOP_CUT`] and the pass fails with [`Error::LoopCut`].
 
-use super::kernel::{Checks, Kernel, buffer, uniform_buffer_on};
+use super::kernel::{AlphaKernels, Checks, buffer, uniform_buffer_on};
 use super::{GpuContext, GpuScene, GpuTimer, LeafMode, Tracer, TracerOptions, VectorVariant, read_buffer};
 use crate::contract::counters::{Counters, STATUS_WORDS};
 use crate::contract::counters::{WORD_LOOP_CUT, WORD_STATUS};
@@ -43,7 +43,7 @@ pub struct ShadowStats {
 /// The shadow pass's pipeline for one tracer, vector variant and leaf mode.
 #[derive(Debug)]
 pub struct ShadowTracer {
-    kernel: Kernel,
+    kernel: AlphaKernels,
     /// The tracer this pass runs.
     pub tracer: Tracer,
     /// The vector variant this pass runs (meaningless for the per-ray tracers).
@@ -103,7 +103,7 @@ impl ShadowTracer {
         } else {
             &[]
         };
-        let kernel = Kernel::new(
+        let kernel = AlphaKernels::new(
             ctx,
             tracer.kernel(),
             aliases,
@@ -199,7 +199,7 @@ impl ShadowTracer {
                         .into(),
                 )
             })?;
-            return self.kernel.bind(
+            return self.kernel.for_scene(scene)?.bind(
                 device,
                 &[
                     buffer("params", &params),
@@ -212,7 +212,7 @@ impl ShadowTracer {
                 ],
             );
         }
-        self.kernel.bind(
+        self.kernel.for_scene(scene)?.bind(
             device,
             &[
                 buffer("params", &params),
@@ -250,6 +250,7 @@ impl ShadowTracer {
         let bind = self.bind(device, scene, image, scratch, &params)?;
         let groups = self.groups(chunk.tiles_x * chunk.tiles_y);
         self.kernel
+            .for_scene(scene)?
             .record(encoder, "shadow/trace", &bind, timestamp_writes, groups);
         Ok(())
     }
