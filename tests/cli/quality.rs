@@ -195,7 +195,7 @@ fn bench_prints_the_table_and_its_json() {
 }
 
 /// A view file with two lights benches each light as its own case (`FILE, light N`), each
-/// with its own timings.
+/// with its own timings, and reports them added up.
 #[test]
 fn bench_with_a_two_light_view_benches_each_light() {
     let dir = out_dir("bench-lights");
@@ -235,4 +235,21 @@ fn bench_with_a_two_light_view_benches_each_light() {
         assert_eq!(case["view"], format!("two.json, light {}", i + 1));
         assert!(case["tracers"][0]["shadow_ms_median"].as_f64().unwrap() > 0.0);
     }
+    // And the two added up: rays and each tracer's median shadow time.
+    let totals = report["light_totals"].as_array().unwrap();
+    assert_eq!(totals.len(), 1, "{report}");
+    let total = &totals[0];
+    assert_eq!(
+        (total["view"].as_str(), total["lights"].as_u64()),
+        (Some("two.json"), Some(2))
+    );
+    let sum = |key: &str| -> f64 { cases.iter().map(|c| c[key].as_f64().unwrap()).sum() };
+    assert_eq!(total["shadow_rays"].as_f64().unwrap(), sum("shadow_rays"));
+    let ms: f64 = cases
+        .iter()
+        .map(|c| c["tracers"][0]["shadow_ms_median"].as_f64().unwrap())
+        .sum();
+    assert_eq!(total["tracers"][0]["tracer"], "mft");
+    assert_eq!(total["tracers"][0]["shadow_ms_median"].as_f64().unwrap(), ms);
+    assert!(stdout.contains("two.json, all 2 lights"), "{stdout}");
 }

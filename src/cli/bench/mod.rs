@@ -363,12 +363,17 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             results.push(result);
         }
     }
+    let light_totals = light_totals(&results);
+    for t in &light_totals {
+        print_light_total(t);
+    }
     let report = BenchReport {
         adapter: ctx.info.name.clone(),
         driver: format!("{} {}", ctx.info.driver, ctx.info.driver_info),
         vector,
         runs: args.runs,
         cases: results,
+        light_totals,
     };
     if let Some(path) = &args.json {
         super::write_json(path, &report)?;

@@ -142,6 +142,110 @@ pub(super) struct BenchReport {
     pub(super) vector: String,
     pub(super) runs: u32,
     pub(super) cases: Vec<CaseResult>,
+    /// The lights of each view file with several, added up ([`light_totals`]).
+    pub(super) light_totals: Vec<LightTotal>,
+}
+
+/// The cases of one view file's lights (`FILE, light N`, same scene and leaf size) added
+/// up: what a frame with all of them costs in shadow rays and each tracer's shadow time.
+#[derive(Debug, Serialize)]
+pub(super) struct LightTotal {
+    pub(super) scene: String,
+    pub(super) view: String,
+    pub(super) leaf_size: u32,
+    pub(super) lights: usize,
+    pub(super) shadow_rays: u64,
+    pub(super) tracers: Vec<TracerTotal>,
+}
+
+/// One tracer's sum over the lights of a [`LightTotal`].
+#[derive(Debug, Serialize)]
+pub(super) struct TracerTotal {
+    pub(super) tracer: String,
+    /// The sum of the lights' median shadow times.
+    pub(super) shadow_ms_median: f64,
+    pub(super) mrays_per_s: f64,
+}
+
+/// Groups the cases named `FILE, light N` by scene, file and leaf size (in the order they
+/// first appear) and adds each group up; a tracer counts where every light of the group has it.
+pub(super) fn light_totals(cases: &[CaseResult]) -> Vec<LightTotal> {
+    // (scene, view file, leaf size) and the cases of its lights.
+    type Group<'a> = ((&'a str, &'a str, u32), Vec<&'a CaseResult>);
+    let mut groups: Vec<Group<'_>> = Vec::new();
+    for c in cases {
+        let Some((file, n)) = c.view.rsplit_once(", light ") else {
+            continue;
+        };
+        if n.parse::<u32>().is_err() {
+            continue;
+        }
+        let key = (c.scene.as_str(), file, c.leaf_size);
+        match groups.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, members)) => members.push(c),
+            None => groups.push((key, vec![c])),
+        }
+    }
+    groups
+        .into_iter()
+        .filter(|(_, members)| members.len() > 1)
+        .map(|((scene, file, leaf_size), members)| {
+            let shadow_rays = members.iter().map(|c| c.shadow_rays).sum();
+            let tracers = members[0]
+                .tracers
+                .iter()
+                .filter_map(|t| {
+                    let times: Option<Vec<f64>> = members
+                        .iter()
+                        .map(|c| {
+                            c.tracers
+                                .iter()
+                                .find(|u| u.tracer == t.tracer)
+                                .map(|u| u.shadow_ms_median)
+                        })
+                        .collect();
+                    let ms: f64 = times?.iter().sum();
+                    Some(TracerTotal {
+                        tracer: t.tracer.clone(),
+                        shadow_ms_median: ms,
+                        mrays_per_s: shadow_rays as f64 / (ms * 1e3),
+                    })
+                })
+                .collect();
+            LightTotal {
+                scene: scene.to_owned(),
+                view: file.to_owned(),
+                leaf_size,
+                lights: members.len(),
+                shadow_rays,
+                tracers,
+            }
+        })
+        .collect()
+}
+
+/// One line per [`LightTotal`].
+pub(super) fn print_light_total(t: &LightTotal) {
+    let tracers: Vec<String> = t
+        .tracers
+        .iter()
+        .map(|u| {
+            format!(
+                "{} {:.1} ms ({:.2} Mrays/s)",
+                u.tracer, u.shadow_ms_median, u.mrays_per_s
+            )
+        })
+        .collect();
+    println!();
+    println!(
+        "{} — {}, all {} lights, leaf ≤ {} — {:.2} M shadow rays; shadow (sum of medians): {}",
+        t.scene,
+        t.view,
+        t.lights,
+        t.leaf_size,
+        t.shadow_rays as f64 / 1e6,
+        tracers.join(", ")
+    );
 }
 
 pub(super) fn median(v: &[f64]) -> f64 {
