@@ -2,7 +2,7 @@
 // One kernel, long because traversal, culling, both leaf modes and suspension are its one job.
 // Dispatched by the shadow pass (src/gpu/shadow_tracer.rs); CPU twin: src/reference/shadow_mft.rs.
 
-#import shared/alpha
+#import shared/alpha_words
 #import shared/bvh
 #import shared/counters
 #import shared/descend
@@ -53,8 +53,6 @@ const BOUNDS_PAD: f32 = 1.0 / 262144.0;  // 2^-18
 // [WORD_STATUS]: tiles suspended by this dispatch; [1..6]: the Table 1 counters
 // (shared/counters, when COUNTERS); [WORD_LOOP_CUT]: tiles whose loop the driver ended.
 @group(0) @binding(7) var<storage, read_write> status: array<atomic<u32>>;
-// The alpha words (bvh::AlphaMasks) that shared/alpha reads for alpha-tested triangles.
-@group(0) @binding(8) var<storage, read> alpha: array<u32>;
 
 // This lane's frustum.
 var<private> f_origin: vec3<f32>;

@@ -1,7 +1,7 @@
 // Packet-traced soft shadows, the paper's baseline: one 16-wide vector per pixel, lane = one of its 16 rays.
 // Dispatched by the shadow tracer (src/gpu/shadow_tracer.rs, Tracer::Packet); CPU twin: src/reference/shadow_packet.rs.
 
-#import shared/alpha
+#import shared/alpha_words
 #import shared/bvh
 #import shared/counters
 #import shared/descend
@@ -28,8 +28,6 @@ const PACKET_STATE_WORDS: u32 = 160u;
 // [WORD_STATUS]: pixels suspended by this dispatch; [1..6]: the Table 1 counters
 // (shared/counters, when COUNTERS); [WORD_LOOP_CUT]: pixels whose loop the driver ended.
 @group(0) @binding(7) var<storage, read_write> status: array<atomic<u32>>;
-// The alpha words (bvh::AlphaMasks) that shared/alpha reads for alpha-tested triangles.
-@group(0) @binding(8) var<storage, read> alpha: array<u32>;
 
 @compute @workgroup_size(VEC16_WG_SIZE)
 fn main(ids: Vec16Ids) {

@@ -2,7 +2,7 @@
 // Dispatched by the shadow tracer (src/gpu/shadow_tracer.rs, Tracer::PerRay and Tracer::Reference);
 // CPU twin: src/reference/shadow_per_ray.rs (per_ray_masks for 16 rays, reference_counts).
 
-#import shared/alpha
+#import shared/alpha_words
 #import shared/bvh
 #import shared/counters
 #import shared/groups
@@ -21,8 +21,6 @@
 // [WORD_STATUS]: rays that ran out of iterations, [WORD_LOOP_CUT]: rays whose loop the
 // driver ended (the host reports either as an error).
 @group(0) @binding(7) var<storage, read_write> status: array<atomic<u32>>;
-// The alpha words (bvh::AlphaMasks) that shared/alpha reads for alpha-tested triangles.
-@group(0) @binding(8) var<storage, read> alpha: array<u32>;
 
 var<private> stack: array<u32, 64>;
 
@@ -50,11 +48,12 @@ fn occluded(origin: vec3<f32>, dir: vec3<f32>) -> i32 {
         }
         iterations += 1u;
         if cursor < end {
-            let tri = triangles[cursor];
-            let h = intersect_triangle(tri, origin, dir, params.t_max);
-            if h.x > 0.0 && !alpha_passes(tri.alpha, hit_weights(h)) {
-                result = 1;
-                break;
+            let h = intersect_triangle(triangles[cursor], origin, dir, params.t_max);
+            if h.x > 0.0 {
+                if !alpha_passes(triangles[cursor].alpha, hit_weights(h)) {
+                    result = 1;
+                    break;
+                }
             }
             cursor += 1u;
             continue;

@@ -51,6 +51,14 @@ pub static SOURCES: &[(&str, &str)] = &[
         include_str!("../shaders/shadow_ray_query.wgsl"),
     ),
     ("shared/alpha", include_str!("../shaders/shared/alpha.wgsl")),
+    (
+        "shared/alpha_none",
+        include_str!("../shaders/shared/alpha_none.wgsl"),
+    ),
+    (
+        "shared/alpha_words",
+        include_str!("../shaders/shared/alpha_words.wgsl"),
+    ),
     ("shared/bvh", include_str!("../shaders/shared/bvh.wgsl")),
     (
         "shared/bvh_vec16",
@@ -97,6 +105,9 @@ pub static SOURCES: &[(&str, &str)] = &[
 /// An alias set: `(import name, module to use instead)`.
 pub type Aliases<'a> = &'a [(&'a str, &'a str)];
 
+/// The alias of the shadow kernels' build without the alpha binding ([`crate::gpu::AlphaKernels`]).
+pub const NO_ALPHA: (&str, &str) = ("shared/alpha_words", "shared/alpha_none");
+
 /// Every kernel (a top-level file of [`SOURCES`]) with the alias sets of all its variants;
 /// `cargo test` assembles and validates each one. A kernel without variants has one empty set.
 pub const KERNELS: &[(&str, &[Aliases<'static>])] = &[
@@ -121,6 +132,8 @@ pub const KERNELS: &[(&str, &[Aliases<'static>])] = &[
         &[
             &[("shared/vec16", "shared/vec16_subgroup")],
             &[("shared/vec16", "shared/vec16_workgroup")],
+            &[("shared/vec16", "shared/vec16_subgroup"), NO_ALPHA],
+            &[("shared/vec16", "shared/vec16_workgroup"), NO_ALPHA],
         ],
     ),
     (
@@ -128,9 +141,11 @@ pub const KERNELS: &[(&str, &[Aliases<'static>])] = &[
         &[
             &[("shared/vec16", "shared/vec16_subgroup")],
             &[("shared/vec16", "shared/vec16_workgroup")],
+            &[("shared/vec16", "shared/vec16_subgroup"), NO_ALPHA],
+            &[("shared/vec16", "shared/vec16_workgroup"), NO_ALPHA],
         ],
     ),
-    ("shadow_per_ray", &[&[]]),
+    ("shadow_per_ray", &[&[], &[NO_ALPHA]]),
     ("shadow_ray_query", &[&[]]),
     ("visibility_to_texture", &[&[]]),
     ("visibility_values", &[&[]]),

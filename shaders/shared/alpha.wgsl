@@ -1,7 +1,7 @@
 // The shadow kernels' alpha test: whether a shadow ray passes an alpha-tested triangle
-// (glTF MASK or BLEND material) where it hits it. Reads the importing kernel's `alpha`
-// binding, the words of bvh::AlphaMasks (shared/layout: AlphaTriangle, AlphaMask).
-// Twin: AlphaMasks::passes.
+// (glTF MASK or BLEND material) where it hits it. Reads an `alpha` binding, the words of
+// bvh::AlphaMasks (shared/layout: AlphaTriangle, AlphaMask), which shared/alpha_words
+// declares (or the ray-query kernel itself). Twin: AlphaMasks::passes.
 
 // Whether a ray passes the triangle whose BvhTriangle.alpha is `record` at the point with
 // barycentric weights `w` (corners 0, 1, 2): never for ALPHA_OPAQUE (nor in a build
@@ -18,9 +18,4 @@ fn alpha_passes(record: u32, w: vec3<f32>) -> bool {
     let uv = uv0 * w.x + uv1 * w.y + uv2 * w.z;
     let i = texel_index(alpha[m], alpha[m + 1u], uv);
     return (alpha[alpha[m + 2u] + i / 32u] & (1u << (i % 32u))) == 0u;
-}
-
-// The barycentric weights (corners 0, 1, 2) of a Moller-Trumbore hit (t, u, v).
-fn hit_weights(h: vec3<f32>) -> vec3<f32> {
-    return vec3<f32>(1.0 - h.y - h.z, h.y, h.z);
 }

@@ -49,3 +49,8 @@ fn intersect_triangle(tri: BvhTriangle, origin: vec3<f32>, dir: vec3<f32>, t_max
     }
     return miss;
 }
+
+// The barycentric weights (corners 0, 1, 2) of a Moller-Trumbore hit (t, u, v).
+fn hit_weights(h: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(1.0 - h.y - h.z, h.y, h.z);
+}

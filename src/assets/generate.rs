@@ -100,6 +100,28 @@ fn downward_square_light(center: Vec3, size: f32) -> QuadLight {
     light
 }
 
+/// The file of `objects` in `materials` (with `camera` on a node of its own) and its view.
+fn scene_and_view(
+    materials: Vec<Material>,
+    objects: Vec<Object>,
+    camera: Camera,
+    light: QuadLight,
+) -> (GlbScene, View) {
+    let scene = GlbScene {
+        materials,
+        objects,
+        camera: Some(glb_camera(&camera)),
+    };
+    (
+        scene,
+        View {
+            camera,
+            light,
+            ground_y: None,
+        },
+    )
+}
+
 fn glb_camera(camera: &Camera) -> GlbCamera {
     GlbCamera {
         eye: camera.eye,
@@ -272,19 +294,7 @@ fn playground() -> (GlbScene, View) {
     // 2 m: a sixth of the 12 m ground. Off-centre towards -x, +z so shadows
     // fall towards +x, -z, across the camera's view.
     let light = downward_square_light(Vec3::new(-2.0, 6.0, 1.0), 2.0);
-    let scene = GlbScene {
-        materials: materials(),
-        objects,
-        camera: Some(glb_camera(&camera)),
-    };
-    (
-        scene,
-        View {
-            camera,
-            light,
-            ground_y: None,
-        },
-    )
+    scene_and_view(materials(), objects, camera, light)
 }
 
 /// Two layers of `count` parallel bars each (along x below, along z above),
@@ -350,19 +360,7 @@ fn lattice() -> (GlbScene, View) {
     // 1.6 m: about a sixth of the 10 m ground; 7 m up so the penumbra of the
     // lattice on the ground (≈ 1.6 · 1 / 6 ≈ 0.27 m) is about one bar spacing.
     let light = downward_square_light(Vec3::new(-1.2, 7.0, 0.8), 1.6);
-    let scene = GlbScene {
-        materials: materials(),
-        objects,
-        camera: Some(glb_camera(&camera)),
-    };
-    (
-        scene,
-        View {
-            camera,
-            light,
-            ground_y: None,
-        },
-    )
+    scene_and_view(materials(), objects, camera, light)
 }
 
 /// Texels per side of the screen's texture, and the period and radius (in texels) of
@@ -462,19 +460,7 @@ fn screen() -> (GlbScene, View) {
     // 0.6 m, 3 m over the screen: penumbrae of 0.6 · 1 / 3 = 0.2 m on the ground, less
     // than the holes' 0.49 m, so each hole casts a fully lit spot with a soft rim.
     let light = downward_square_light(Vec3::new(-0.3, 4.0, 0.2), 0.6);
-    let scene = GlbScene {
-        materials,
-        objects,
-        camera: Some(glb_camera(&camera)),
-    };
-    (
-        scene,
-        View {
-            camera,
-            light,
-            ground_y: None,
-        },
-    )
+    scene_and_view(materials, objects, camera, light)
 }
 
 #[cfg(test)]

@@ -158,15 +158,19 @@ struct BinBuilder {
 }
 
 impl BinBuilder {
-    /// Appends `data` as a new buffer view, 4-byte aligned; returns its index.
-    fn push_view(&mut self, data: &[u8], target: u32) -> usize {
+    /// Appends `data` as a new buffer view, 4-byte aligned, with `target` (none for an
+    /// image); returns its index.
+    fn push_view(&mut self, data: &[u8], target: Option<u32>) -> usize {
         pad_to_4(&mut self.bytes, 0);
-        self.views.push(json!({
+        let mut view = json!({
             "buffer": 0,
             "byteOffset": self.bytes.len(),
             "byteLength": data.len(),
-            "target": target,
-        }));
+        });
+        if let Some(target) = target {
+            view["target"] = json!(target);
+        }
+        self.views.push(view);
         self.bytes.extend_from_slice(data);
         self.views.len() - 1
     }
@@ -178,7 +182,7 @@ impl BinBuilder {
 
     /// Adds a VEC3 float attribute; returns its accessor index.
     fn push_vec3s(&mut self, data: &[[f32; 3]], with_bounds: bool) -> usize {
-        let view = self.push_view(bytemuck::cast_slice(data), ARRAY_BUFFER);
+        let view = self.push_view(bytemuck::cast_slice(data), Some(ARRAY_BUFFER));
         let mut accessor = json!({
             "bufferView": view,
             "componentType": COMPONENT_F32,
@@ -195,7 +199,7 @@ impl BinBuilder {
 
     /// Adds a VEC2 float attribute; returns its accessor index.
     fn push_vec2s(&mut self, data: &[[f32; 2]]) -> usize {
-        let view = self.push_view(bytemuck::cast_slice(data), ARRAY_BUFFER);
+        let view = self.push_view(bytemuck::cast_slice(data), Some(ARRAY_BUFFER));
         self.push_accessor(json!({
             "bufferView": view,
             "componentType": COMPONENT_F32,
@@ -204,21 +208,9 @@ impl BinBuilder {
         }))
     }
 
-    /// Adds an image's bytes as a buffer view with no target; returns the view's index.
-    fn push_image(&mut self, data: &[u8]) -> usize {
-        pad_to_4(&mut self.bytes, 0);
-        self.views.push(json!({
-            "buffer": 0,
-            "byteOffset": self.bytes.len(),
-            "byteLength": data.len(),
-        }));
-        self.bytes.extend_from_slice(data);
-        self.views.len() - 1
-    }
-
     /// Adds a `u32` index list; returns its accessor index.
     fn push_indices(&mut self, indices: &[u32]) -> usize {
-        let view = self.push_view(bytemuck::cast_slice(indices), ELEMENT_ARRAY_BUFFER);
+        let view = self.push_view(bytemuck::cast_slice(indices), Some(ELEMENT_ARRAY_BUFFER));
         self.push_accessor(json!({
             "bufferView": view,
             "componentType": COMPONENT_U32,
@@ -282,7 +274,7 @@ fn material_json(
         },
     });
     if let Some(mask) = &material.mask {
-        let view = bin.push_image(&mask.png);
+        let view = bin.push_view(&mask.png, None);
         images.push(json!({ "bufferView": view, "mimeType": "image/png" }));
         textures.push(json!({ "source": images.len() - 1 }));
         json["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": textures.len() - 1 });

@@ -241,18 +241,20 @@ impl Kernel {
     }
 }
 
-/// A tracing kernel in two builds: without the alpha test (`ALPHA_TEST` false, the
-/// override every tracing kernel declares in `shared/layout`), which scenes without
+/// A tracing kernel in two builds: without the alpha test, which scenes without
 /// alpha-tested triangles run, and with it, built the first time such a scene needs it.
-/// The driver removes the test's code from the first build, so opaque scenes run the
-/// kernel as if masks did not exist: on lavapipe, which runs both sides of a branch that
-/// lanes take differently, the test's code cost 3–6× even where no triangle had a mask.
+/// The first has `ALPHA_TEST` false (the override every tracing kernel declares in
+/// `shared/layout`; the driver removes the test's code) and, in the shadow kernels that
+/// bind the alpha words, [`crate::shaders::NO_ALPHA`] in place of that binding. So opaque
+/// scenes run the kernels as if masks did not exist: on lavapipe, which runs both sides of
+/// a branch that lanes take differently, the test's code cost 4.5–8.8× where no triangle
+/// had a mask, and on Mesa 25 a ninth binding alone cost the per-ray kernel about 30 %.
 #[derive(Debug)]
 pub struct AlphaKernels {
     opaque: Kernel,
     alpha: OnceLock<Kernel>,
     main: &'static str,
-    aliases: Aliases<'static>,
+    aliases: Vec<(&'static str, &'static str)>,
     constants: Vec<(&'static str, f64)>,
     checks: Checks,
     device: wgpu::Device,
@@ -270,11 +272,13 @@ impl AlphaKernels {
     ) -> Result<AlphaKernels> {
         let mut opaque_constants = constants.to_vec();
         opaque_constants.push(("ALPHA_TEST", 0.0));
+        let mut opaque_aliases = aliases.to_vec();
+        opaque_aliases.push(crate::shaders::NO_ALPHA);
         Ok(AlphaKernels {
-            opaque: Kernel::new(ctx, main, aliases, &opaque_constants, checks)?,
+            opaque: Kernel::new(ctx, main, &opaque_aliases, &opaque_constants, checks)?,
             alpha: OnceLock::new(),
             main,
-            aliases,
+            aliases: aliases.to_vec(),
             constants: constants.to_vec(),
             checks,
             device: ctx.device.clone(),
@@ -293,14 +297,9 @@ impl AlphaKernels {
         let mut constants = self.constants.clone();
         constants.push(("ALPHA_TEST", 1.0));
         let ctx = GpuContext::from_device(&self.device, &self.queue);
-        let kernel = Kernel::new(&ctx, self.main, self.aliases, &constants, self.checks)?;
+        let kernel = Kernel::new(&ctx, self.main, &self.aliases, &constants, self.checks)?;
         // Another thread may have built it meanwhile: either build is the same pipeline.
         Ok(self.alpha.get_or_init(|| kernel))
-    }
-
-    /// The build without the alpha test (its bindings are the other's too).
-    pub fn opaque(&self) -> &Kernel {
-        &self.opaque
     }
 }
 

@@ -212,20 +212,22 @@ impl ShadowTracer {
                 ],
             );
         }
-        self.kernel.for_scene(scene)?.bind(
-            device,
-            &[
-                buffer("params", &params),
-                buffer("nodes", &scene.nodes),
-                buffer("triangles", &scene.triangles),
-                buffer("gbuffer", image.gbuffer),
-                buffer("light_points", image.light_points),
-                buffer("masks", image.masks),
-                buffer("state", &scratch.state),
-                buffer("status", &scratch.status),
-                buffer("alpha", &scene.alpha),
-            ],
-        )
+        let kernel = self.kernel.for_scene(scene)?;
+        let mut resources = vec![
+            buffer("params", &params),
+            buffer("nodes", &scene.nodes),
+            buffer("triangles", &scene.triangles),
+            buffer("gbuffer", image.gbuffer),
+            buffer("light_points", image.light_points),
+            buffer("masks", image.masks),
+            buffer("state", &scratch.state),
+            buffer("status", &scratch.status),
+        ];
+        // Only the build for scenes with alpha-tested triangles binds them (AlphaKernels).
+        if kernel.bindings.iter().any(|(_, name)| name == "alpha") {
+            resources.push(buffer("alpha", &scene.alpha));
+        }
+        kernel.bind(device, &resources)
     }
 
     /// Records round `round` of the chunk `chunk` (round 0 starts its tiles afresh, later
