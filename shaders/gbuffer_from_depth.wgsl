@@ -26,10 +26,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var texel = background_texel();
     if z != params.background_depth {
         let relative = params.clip_to_eye * pixel_clip(params, gid.xy, z);
-        let shading = textureLoad(normal_texture, pixel, 0).xyz;
+        let shading = decode_normal(params, textureLoad(normal_texture, pixel, 0).xyz);
         var geometric = shading;
         if params.has_geo_normal != 0u {
-            geometric = textureLoad(geo_normal_texture, pixel, 0).xyz;
+            geometric = decode_normal(params, textureLoad(geo_normal_texture, pixel, 0).xyz);
         }
         texel = surface_texel(params, params.eye + relative.xyz / relative.w, shading, geometric);
     }

@@ -26,10 +26,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let position = textureLoad(position_texture, pixel, 0);
     var texel = background_texel();
     if position.w != 0.0 {
-        let shading = textureLoad(normal_texture, pixel, 0).xyz;
+        let shading = decode_normal(params, textureLoad(normal_texture, pixel, 0).xyz);
         var geometric = shading;
         if params.has_geo_normal != 0u {
-            geometric = textureLoad(geo_normal_texture, pixel, 0).xyz;
+            geometric = decode_normal(params, textureLoad(geo_normal_texture, pixel, 0).xyz);
         }
         texel = surface_texel(params, position.xyz, shading, geometric);
     }

@@ -18,7 +18,8 @@ use std::time::Instant;
 use glam::Mat4;
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::gpu::{
-    GpuContext, GpuScene, ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, SurfaceInput,
+    GpuContext, GpuScene, NormalEncoding, ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets,
+    SurfaceInput,
 };
 use penumbra::output::{HdrImage, ToneMap, write_image};
 use penumbra::scene::Scene;
@@ -125,6 +126,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         },
         normal: &gbuffer.normal,
         geometric_normal: Some(&gbuffer.face_normal),
+        normal_encoding: NormalEncoding::Signed,
         light: &view.light,
     };
     pass.record(&mut encoder, &gpu_scene, &inputs, &targets)?;

@@ -13,8 +13,11 @@ struct SurfaceParams {
     background_depth: f32,       // bytes 88..92: depth texels equal to this see no geometry
     has_geo_normal: u32,         // bytes 92..96: 1 = the geometric-normal texture is the host's own
     origin: vec3<f32>,           // bytes 96..108: GpuScene::origin, which ray origins are relative to
-    pad: u32,                    // bytes 108..112
+    normal_encoding: u32,        // bytes 108..112: NORMALS_BIASED = stored as n * 0.5 + 0.5
 }
+
+// SurfaceParams::normal_encoding of textures that hold n * 0.5 + 0.5 (else: n itself).
+const NORMALS_BIASED: u32 = 1u;
 
 // An image size for the per-pixel kernels, 16 bytes.
 struct ImageSize {
@@ -32,6 +35,14 @@ fn pixel_clip(params: SurfaceParams, pixel: vec2<u32>, z: f32) -> vec4<f32> {
     let sx = 2.0 * (f32(pixel.x) + 0.5) / f32(params.width) - 1.0;
     let sy = 1.0 - 2.0 * (f32(pixel.y) + 0.5) / f32(params.height);
     return vec4<f32>(sx, sy, z, 1.0);
+}
+
+// The normal a normal texture's texel `v` stores (twin: gbuffer_from_surface::decode_normal).
+fn decode_normal(params: SurfaceParams, v: vec3<f32>) -> vec3<f32> {
+    if params.normal_encoding == NORMALS_BIASED {
+        return v * 2.0 - 1.0;
+    }
+    return v;
 }
 
 // `v` normalized, or `fallback` when `v` has no length (a host that wrote no normal).

@@ -334,9 +334,16 @@ pub struct SurfaceParams {
     /// [`crate::gpu::GpuScene::origin`]: the texels' ray origins are relative to it, as
     /// the scene's BVH is (bytes 96..108).
     pub origin: Vec3,
-    /// Unused (bytes 108..112).
-    pub pad: u32,
+    /// How the normal textures store a normal (bytes 108..112): [`NORMALS_SIGNED`] or
+    /// [`NORMALS_BIASED`] ([`crate::gpu::NormalEncoding`]).
+    pub normal_encoding: u32,
 }
+
+/// [`SurfaceParams::normal_encoding`]: the texels are the normal's components.
+pub const NORMALS_SIGNED: u32 = 0;
+/// [`SurfaceParams::normal_encoding`]: the texels are `n · ½ + ½` (a unorm texture holding
+/// signed components, as Bevy's normal prepass writes them).
+pub const NORMALS_BIASED: u32 = 1;
 
 /// An image size for the per-pixel kernels, 16 bytes (WGSL `ImageSize`).
 #[repr(C)]
@@ -642,7 +649,7 @@ mod tests {
                 background_depth,
                 has_geo_normal,
                 origin,
-                pad
+                normal_encoding
             }),
         );
         check(

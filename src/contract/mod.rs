@@ -67,6 +67,7 @@ mod tests {
             ("MASK_SKY", U32(layout::MASK_SKY)),
             ("ORIGIN_OFFSET_ULPS", F32(layout::ORIGIN_OFFSET_ULPS)),
             ("UNKNOWN_TRIANGLE", U32(layout::GBufferTexel::UNKNOWN_TRIANGLE)),
+            ("NORMALS_BIASED", U32(layout::NORMALS_BIASED)),
             // shared/suspend
             ("ST_STATUS", u(suspend::ST_STATUS)),
             ("ST_LANES", u(suspend::ST_LANES)),

@@ -36,7 +36,9 @@ pub use context::{
     ADAPTER_ENV, AdapterSummary, GpuContext, GpuOptions, LAVAPIPE_VECTOR_WIDTH_ENV, NO_DEVICE_SELECT_ENV,
     set_driver_defaults, set_driver_defaults_for_drawing,
 };
-pub use embed::{ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, SurfaceInput, VISIBILITY_FORMAT};
+pub use embed::{
+    NormalEncoding, ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, SurfaceInput, VISIBILITY_FORMAT,
+};
 pub use frame::{Ambient, Frame, image_of_lights};
 pub use motion::{MotionSettings, MotionUpdate};
 pub use pixel_buffers::{PIXEL_BUFFERS, PixelBuffer, PixelBuffers};

@@ -5,7 +5,7 @@
 
 use glam::{Mat4, Vec3, Vec4};
 
-use crate::contract::layout::{GBufferTexel, SurfaceParams};
+use crate::contract::layout::{GBufferTexel, NORMALS_BIASED, SurfaceParams};
 
 /// Clip-space position of pixel `(x, y)`'s centre at depth `z` (row 0 at the top,
 /// wgpu's depth range 0..1): the sample point a rasterizer uses for that pixel.
@@ -20,6 +20,17 @@ pub fn pixel_clip(params: &SurfaceParams, x: u32, y: u32, z: f32) -> Vec4 {
 pub fn unproject(params: &SurfaceParams, x: u32, y: u32, z: f32) -> Vec3 {
     let relative = Mat4::from_cols_array_2d(&params.clip_to_eye) * pixel_clip(params, x, y, z);
     params.eye + relative.truncate() / relative.w
+}
+
+/// The normal a normal texture's texel `v` (its xyz) stores, as
+/// [`SurfaceParams::normal_encoding`] says: `v` itself, or `2v − 1` for
+/// [`NORMALS_BIASED`].
+pub fn decode_normal(params: &SurfaceParams, v: Vec3) -> Vec3 {
+    if params.normal_encoding == NORMALS_BIASED {
+        v * 2.0 - Vec3::ONE
+    } else {
+        v
+    }
 }
 
 /// `v` normalized, or `fallback` when `v` has no (finite) length.

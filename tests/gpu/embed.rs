@@ -16,8 +16,8 @@ use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::contract::filter::FilterParams;
 use penumbra::contract::layout::GBufferTexel;
 use penumbra::gpu::{
-    FrameSettings, GpuContext, GpuScene, Renderer, ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets,
-    SurfaceInput, VectorVariant, read_buffer,
+    FrameSettings, GpuContext, GpuScene, NormalEncoding, Renderer, ShadowInputs, ShadowPass, ShadowSettings,
+    ShadowTargets, SurfaceInput, VectorVariant, read_buffer,
 };
 use penumbra::reference::filter::discontinuity_filter;
 use penumbra::reference::visibility::visibility;
@@ -89,6 +89,23 @@ fn embedded_frame_into(
     targets: &ShadowTargets,
     positions: bool,
 ) -> Embedded {
+    embedded_frame_with_normals(pass, scene, gpu_scene, view, targets, positions, None)
+}
+
+/// Normal textures handed to the pass instead of the host's: shading, geometric, and how
+/// both store normals.
+type GivenNormals<'a> = (&'a wgpu::Texture, &'a wgpu::Texture, NormalEncoding);
+
+/// [`embedded_frame_into`] with `normals` in place of the rasterizer's (signed) ones.
+fn embedded_frame_with_normals(
+    pass: &ShadowPass,
+    scene: &Scene,
+    gpu_scene: &GpuScene,
+    view: &View,
+    targets: &ShadowTargets,
+    positions: bool,
+    normals: Option<GivenNormals<'_>>,
+) -> Embedded {
     let ctx = ctx();
     let (w, h) = (targets.width(), targets.height());
     let rasterizer = Rasterizer::new(&ctx.device, scene);
@@ -115,10 +132,13 @@ fn embedded_frame_into(
             background_depth: 1.0,
         }
     };
+    let (normal, geometric, normal_encoding) =
+        normals.unwrap_or((&host.normal, &host.face_normal, NormalEncoding::Signed));
     let inputs = ShadowInputs {
         surface,
-        normal: &host.normal,
-        geometric_normal: Some(&host.face_normal),
+        normal,
+        geometric_normal: Some(geometric),
+        normal_encoding,
         light: &view.light,
     };
     pass.record(&mut encoder, gpu_scene, &inputs, targets).unwrap();
@@ -371,6 +391,7 @@ fn bad_input_textures_are_refused_with_a_clear_error() {
             },
             normal,
             geometric_normal: None,
+            normal_encoding: NormalEncoding::Signed,
             light: &view.light,
         };
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
@@ -389,6 +410,88 @@ fn bad_input_textures_are_refused_with_a_clear_error() {
         ShadowTargets::new(ctx, 0, 24),
         Err(Error::InvalidInput { .. })
     ));
+}
+
+/// An `Rgb10a2Unorm` texture (Bevy's normal-prepass format) holding `normals` as
+/// `n · ½ + ½`, rounded to the nearest of its 1023 steps.
+fn biased_normal_texture(normals: &[glam::Vec3], (w, h): (u32, u32)) -> wgpu::Texture {
+    let ctx = ctx();
+    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("biased normals"),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgb10a2Unorm,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let unorm10 = |c: f32| ((c * 0.5 + 0.5).clamp(0.0, 1.0) * 1023.0).round() as u32;
+    let texels: Vec<u32> = normals
+        .iter()
+        .map(|n| unorm10(n.x) | unorm10(n.y) << 10 | unorm10(n.z) << 20 | 3 << 30)
+        .collect();
+    ctx.queue.write_texture(
+        texture.as_image_copy(),
+        bytemuck::cast_slice(&texels),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(w * 4),
+            rows_per_image: None,
+        },
+        texture.size(),
+    );
+    texture
+}
+
+/// Normals stored biased in a unorm texture (`NormalEncoding::Biased`, as Bevy's prepass
+/// writes them) give the G-buffer the signed input gives, up to the texture's rounding,
+/// and masks that match the oracle. The biased textures hold the signed run's own unit
+/// normals: 10-bit steps of 1/1023 on `n · ½ + ½` move each decoded component by at most
+/// 1/1023, a unit vector by at most √3/1023 < 1.7e-3, and normalizing keeps that bound.
+#[test]
+fn biased_normals_in_a_unorm_texture_decode_to_the_signed_ones() {
+    let (scene, view) = embedded("playground");
+    let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
+    let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
+    let size = (64, 48);
+    let pass = ShadowPass::new(ctx(), ShadowSettings::default()).unwrap();
+    let targets = ShadowTargets::new(ctx(), size.0, size.1).unwrap();
+    let signed = embedded_frame_into(&pass, &scene, &gpu_scene, &view, &targets, false);
+    let shading: Vec<glam::Vec3> = signed.gbuffer.iter().map(|t| t.normal).collect();
+    let geometric: Vec<glam::Vec3> = signed.gbuffer.iter().map(|t| t.geo_normal).collect();
+    let (shading, geometric) = (
+        biased_normal_texture(&shading, size),
+        biased_normal_texture(&geometric, size),
+    );
+    let given = (&shading, &geometric, NormalEncoding::Biased);
+    let biased = embedded_frame_with_normals(&pass, &scene, &gpu_scene, &view, &targets, false, Some(given));
+    let mut worst = 0.0f32;
+    let mut hits = 0;
+    for (s, b) in signed.gbuffer.iter().zip(&biased.gbuffer) {
+        assert_eq!(
+            s.is_hit(),
+            b.is_hit(),
+            "the normals changed which pixels see geometry"
+        );
+        if s.is_hit() {
+            hits += 1;
+            worst = worst
+                .max((s.normal - b.normal).length())
+                .max((s.geo_normal - b.geo_normal).length());
+        }
+    }
+    eprintln!("biased normals: {hits} pixels with geometry, normals within {worst:.2e} of the signed ones");
+    assert!(hits > 0, "the view sees no geometry");
+    assert!(
+        worst < 1.7e-3,
+        "decoded normals differ from the signed ones by {worst} (rounding allows 1.7e-3)"
+    );
+    check_against_oracles("biased normals", &scene, &bvh, &view, &biased, size);
 }
 
 /// Two passes, two scenes and two sets of targets recorded into one encoder: each frame

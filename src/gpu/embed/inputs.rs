@@ -44,6 +44,17 @@ pub enum SurfaceInput<'a> {
     },
 }
 
+/// How the host's normal textures store a normal.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum NormalEncoding {
+    /// The texels are the normal's components (a float or snorm format).
+    #[default]
+    Signed,
+    /// The texels are `n · ½ + ½`: signed components kept in a unorm format, as Bevy's
+    /// normal prepass writes them (`Rgb10a2Unorm`).
+    Biased,
+}
+
 /// The host's per-frame inputs to [`super::ShadowPass::record`]. All textures are the
 /// size of the [`super::ShadowTargets`] they are recorded with; row 0 is the top row.
 #[derive(Clone, Copy, Debug)]
@@ -52,7 +63,8 @@ pub struct ShadowInputs<'a> {
     pub surface: SurfaceInput<'a>,
     /// World-space shading normals in xyz (any length, either side: they are normalized
     /// and turned towards the camera). Any float or normalized format read unfiltered,
-    /// e.g. `Rgba16Float` or `Rgba8Snorm` (not `Rgba8Unorm`: normals are signed).
+    /// e.g. `Rgba16Float` or `Rgba8Snorm`; a unorm format (`Rgba8Unorm`, `Rgb10a2Unorm`)
+    /// only with [`NormalEncoding::Biased`], since normals are signed.
     /// The filter compares them between neighbours.
     pub normal: &'a wgpu::Texture,
     /// World-space geometric (face) normals, same formats as `normal`, or `None` to use
@@ -61,6 +73,8 @@ pub struct ShadowInputs<'a> {
     /// normals instead, pixels near a curved object's terminator differ slightly from
     /// penumbra's own renderer (which uses face normals).
     pub geometric_normal: Option<&'a wgpu::Texture>,
+    /// How `normal` and `geometric_normal` store normals.
+    pub normal_encoding: NormalEncoding,
     /// The quad light whose soft shadows are traced (16 rays per pixel towards the
     /// pixel's set of light samples, [`crate::sampling::light_points`]).
     pub light: &'a QuadLight,

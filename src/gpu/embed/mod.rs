@@ -16,7 +16,7 @@
 //! pass can serve several scenes (the scene is an argument of `record`).
 //!
 //! ```no_run
-//! use penumbra::gpu::{GpuContext, GpuScene, ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, SurfaceInput};
+//! use penumbra::gpu::{GpuContext, GpuScene, NormalEncoding, ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, SurfaceInput};
 //! use penumbra::{assets, bvh::{Bvh, BvhSettings}, scene::Scene};
 //! # fn frame(device: &wgpu::Device, queue: &wgpu::Queue, depth: &wgpu::Texture,
 //! #          normals: &wgpu::Texture, view: glam::Mat4, projection: glam::Mat4) -> penumbra::Result<()> {
@@ -36,6 +36,7 @@
 //!     surface: SurfaceInput::Depth { texture: depth, view, projection, background_depth: 1.0 },
 //!     normal: normals,
 //!     geometric_normal: None,
+//!     normal_encoding: NormalEncoding::Signed,
 //!     light: &light,
 //! };
 //! pass.record(&mut encoder, &gpu_scene, &inputs, &targets)?;
@@ -49,7 +50,7 @@
 mod inputs;
 mod targets;
 
-pub use inputs::{ShadowInputs, SurfaceInput};
+pub use inputs::{NormalEncoding, ShadowInputs, SurfaceInput};
 pub use targets::{ShadowTargets, VISIBILITY_FORMAT};
 
 use super::kernel::{Checks, Kernel, buffer, texture, uniform_buffer_on};
@@ -58,7 +59,7 @@ use super::{GpuContext, GpuScene, LeafMode, ShadowImage, TracerOptions, VectorVa
 use crate::contract::ITERATION_BUDGET;
 use crate::contract::filter::FilterParams;
 use crate::contract::groups::PIXEL_GROUP;
-use crate::contract::layout::{ImageSize, SurfaceParams};
+use crate::contract::layout::{ImageSize, NORMALS_BIASED, NORMALS_SIGNED, SurfaceParams};
 use crate::contract::shadow::shadow_params;
 use crate::pass_inputs::RAY_OFFSET_FRACTION;
 use crate::{Error, Result};
@@ -182,6 +183,13 @@ impl ShadowPass {
         })
     }
 
+    /// Whether `device` has what a pass with `settings` needs: [`Error::DeviceUnsupported`]
+    /// listing every missing feature and too-small limit, as [`ShadowPass::new`] reports
+    /// it. For hosts that check before they build (Bevy's `Plugin::finish`).
+    pub fn check_device(device: &wgpu::Device, settings: &ShadowSettings) -> Result<()> {
+        check_device(device, settings)
+    }
+
     /// The settings the pass was built with.
     pub fn settings(&self) -> &ShadowSettings {
         &self.settings
@@ -248,7 +256,10 @@ impl ShadowPass {
             background_depth,
             has_geo_normal: u32::from(inputs.geometric_normal.is_some()),
             origin: scene.origin,
-            pad: 0,
+            normal_encoding: match inputs.normal_encoding {
+                NormalEncoding::Signed => NORMALS_SIGNED,
+                NormalEncoding::Biased => NORMALS_BIASED,
+            },
         };
         let params_buf = uniform_buffer_on(device, "surface params", &params);
         let pixels = &targets.pixels;
