@@ -21,7 +21,7 @@ use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
 use bevy::render::render_resource::TextureFormat;
 use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured};
 use bevy::window::ExitCondition;
-use penumbra_bevy::{PenumbraPlugin, PenumbraShadows, QuadLight};
+use penumbra_bevy::{PenumbraPlugin, PenumbraShadows};
 
 /// The image size.
 const SIZE: (u32, u32) = (480, 320);
@@ -209,10 +209,11 @@ fn setup(
         Transform::from_xyz(0.1, 0.6, -1.6),
         NotShadowCaster,
     ));
-    // A 1.2 m × 0.5 m panel 2.6 m above the ground, facing down.
+    // A 1.2 m × 0.5 m panel 2.6 m above the ground, facing down: Bevy's rect light, whose
+    // lumens over area × π are its radiance, 60,000 nits.
     commands.spawn((
-        QuadLight {
-            radiance: 60_000.0,
+        RectLight {
+            intensity: 60_000.0 * 1.2 * 0.5 * std::f32::consts::PI,
             width: 1.2,
             height: 0.5,
             ..default()

@@ -1,8 +1,8 @@
 //! Ray-traced soft shadows from quad lights in Bevy 0.20, by penumbra's embedded shadow pass
 //! (multi-frusta tracing, 16 rays per pixel, the 4×4 discontinuity filter).
 //!
-//! Add [`PenumbraPlugin`], put [`PenumbraShadows`] on a 3-D camera and [`QuadLight`] on
-//! one or more entities. Each frame the plugin
+//! Add [`PenumbraPlugin`] and put [`PenumbraShadows`] on a 3-D camera: Bevy's `RectLight`s
+//! then cast penumbra's shadows. Each frame the plugin
 //!
 //! 1. keeps a penumbra scene of the world's meshes (`Mesh3d` + `GlobalTransform`, except
 //!    those marked [`NotShadowCaster`](bevy::light::NotShadowCaster)): rebuilt when meshes are added, removed or edited,
@@ -10,14 +10,16 @@
 //! 2. after Bevy's prepass, traces each light's visibility from the camera's depth and
 //!    normal prepass textures ([`ShadowPass::record`] into Bevy's command encoder);
 //! 3. after the main pass, adds each light's diffuse light times that visibility to the
-//!    camera's HDR target ([`composite`]).
+//!    camera's HDR target ([`composite`]), in place of Bevy's own, unshadowed, rect-light
+//!    shading (the plugin removes the lights from Bevy's light list after extraction).
 //!
 //! What is supported: forward rendering with `Hdr` cameras, `Msaa::Off` (the prepass
 //! textures must be single-sampled), perspective and orthographic projections, any number
 //! of cameras and lights. What is not: MSAA, deferred rendering's material data (the added
-//! light uses [`PenumbraShadows::albedo`], not the mesh's material), Bevy's own `RectLight`
-//! (its light is added in Bevy's shader with no visibility term, so it cannot be
-//! shadowed from outside), skinned or morphed meshes (their rest pose is traced).
+//! light uses [`PenumbraShadows::albedo`], not the mesh's material), the rect lights'
+//! specular highlights (Bevy's shading of them is replaced by a diffuse term), rect lights
+//! seen by cameras without [`PenumbraShadows`] (they see none), skinned or morphed meshes
+//! (their rest pose is traced).
 
 pub mod casters;
 pub mod composite;
@@ -31,39 +33,9 @@ use bevy::render::renderer::RenderDevice;
 
 pub use penumbra::gpu::{GpuScene, LeafMode, ShadowPass, ShadowSettings, VectorVariant};
 
-/// Adds penumbra's soft shadows to cameras with [`PenumbraShadows`] for every
-/// [`QuadLight`].
+/// Adds penumbra's soft shadows to cameras with [`PenumbraShadows`] for every visible
+/// `RectLight`.
 pub struct PenumbraPlugin;
-
-/// A one-sided rectangular area light whose shadows penumbra traces. Like Bevy's
-/// `RectLight`, it lies in its entity's local XY plane, centred on the origin, and emits
-/// towards local −Z; its size follows the entity's scale.
-#[derive(Component, Clone, Copy, Debug, PartialEq, Reflect)]
-#[require(Transform, Visibility)]
-pub struct QuadLight {
-    /// Linear colour of the emitted radiance.
-    pub color: Color,
-    /// Radiance in nits (cd/m²): what the camera sees looking at the light; a surface
-    /// facing a light of radiance `L` that covers solid angle `ω` receives about `L·ω`.
-    pub radiance: f32,
-    /// Extent along local X, metres.
-    pub width: f32,
-    /// Extent along local Y, metres.
-    pub height: f32,
-}
-
-impl Default for QuadLight {
-    /// White, 1 m × 1 m, 10,000 nits (a bright diffuse panel; at Bevy's default exposure,
-    /// a surface 2 m below it is lit about as a sunny day's ground is).
-    fn default() -> Self {
-        QuadLight {
-            color: Color::WHITE,
-            radiance: 10_000.0,
-            width: 1.0,
-            height: 1.0,
-        }
-    }
-}
 
 /// A camera that gets penumbra's soft shadows; its settings. Requires the depth and normal
 /// prepasses and an HDR target (added with it) and no MSAA: `Camera3d` brings 4× MSAA

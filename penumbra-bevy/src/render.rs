@@ -5,6 +5,7 @@ use std::sync::Arc;
 
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::core_pipeline::{Core3d, Core3dSystems};
+use bevy::pbr::{ExtractedRectLight, extract_lights};
 use bevy::prelude::*;
 use bevy::render::camera::ExtractedCamera;
 use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue, ViewQuery};
@@ -18,9 +19,9 @@ use penumbra::gpu::{
 };
 use penumbra::scene::Scene;
 
+use crate::PenumbraShadows;
 use crate::casters::{Casters, to_penumbra};
 use crate::composite::Composite;
-use crate::{PenumbraShadows, QuadLight};
 
 /// The casters and lights as extracted this frame.
 #[derive(Resource, Default)]
@@ -31,7 +32,7 @@ pub struct ExtractedShadowWorld {
     pub scene: Option<Arc<Scene>>,
     /// Moves not yet applied to the GPU scene.
     pub moves: Vec<(u32, glam::Mat4)>,
-    /// Every [`QuadLight`], world space, in entity order.
+    /// Every visible `RectLight`, world space, in entity order.
     pub lights: Vec<penumbra::scene::view::QuadLight>,
 }
 
@@ -62,7 +63,10 @@ pub(crate) fn build(render_app: &mut SubApp) {
     render_app
         .init_resource::<ExtractedShadowWorld>()
         .add_systems(RenderStartup, init_gpu)
-        .add_systems(ExtractSchedule, extract)
+        .add_systems(
+            ExtractSchedule,
+            (extract, take_over_rect_lights.after(extract_lights)),
+        )
         .add_systems(Render, prepare.in_set(RenderSystems::PrepareResources))
         .add_systems(
             Core3d,
@@ -89,12 +93,14 @@ fn init_gpu(mut commands: Commands, device: Res<RenderDevice>, queue: Res<Render
     });
 }
 
-/// A light's quad in world space: the entity's XY plane, facing its −Z.
-fn world_light(light: &QuadLight, transform: &GlobalTransform) -> penumbra::scene::view::QuadLight {
+/// A rect light as penumbra's quad light: in its entity's XY plane, centred, facing −Z;
+/// radiance in nits from Bevy's lumens as Bevy converts them (over area × π).
+fn world_light(light: &RectLight, transform: &GlobalTransform) -> penumbra::scene::view::QuadLight {
     let m = transform.to_matrix();
     let corner = m.transform_point3(Vec3::new(-0.5 * light.width, -0.5 * light.height, 0.0));
     let edge_u = m.transform_vector3(Vec3::X * light.width);
     let edge_v = m.transform_vector3(Vec3::Y * light.height);
+    let area = edge_u.length() * edge_v.length();
     let v = |p: Vec3| glam::Vec3::from_array(p.to_array());
     // penumbra's light faces cross(edge_u, edge_v) = +Z here; swapping the edges faces −Z.
     let linear = light.color.to_linear();
@@ -103,14 +109,14 @@ fn world_light(light: &QuadLight, transform: &GlobalTransform) -> penumbra::scen
         edge_u: v(edge_v),
         edge_v: v(edge_u),
         color: glam::Vec3::new(linear.red, linear.green, linear.blue),
-        intensity: light.radiance,
+        intensity: light.intensity / (area * std::f32::consts::PI),
     }
 }
 
 fn extract(
     mut commands: Commands,
     casters: Extract<Res<Casters>>,
-    lights: Extract<Query<(Entity, &QuadLight, &GlobalTransform, &ViewVisibility)>>,
+    lights: Extract<Query<(Entity, &RectLight, &GlobalTransform, &ViewVisibility)>>,
     cameras: Extract<Query<(RenderEntity, &PenumbraShadows, &Camera)>>,
     mut world: ResMut<ExtractedShadowWorld>,
 ) {
@@ -125,7 +131,7 @@ fn extract(
     found.sort_by_key(|(e, ..)| *e);
     world.lights = found
         .into_iter()
-        .filter(|(_, l, ..)| l.width > 0.0 && l.height > 0.0 && l.radiance > 0.0)
+        .filter(|(_, l, _, visible)| visible.get() && l.width > 0.0 && l.height > 0.0 && l.intensity > 0.0)
         .map(|(_, l, t, _)| world_light(l, t))
         .collect();
     for (entity, settings, camera) in &cameras {
@@ -134,6 +140,17 @@ fn extract(
             e.insert(*settings);
         } else {
             e.remove::<PenumbraShadows>();
+        }
+    }
+}
+
+/// Removes the rect lights from Bevy's light list (extracted just before): penumbra's
+/// composite lights them instead, shadowed. Bevy extracts a light again only when it
+/// changes, so this runs every frame.
+fn take_over_rect_lights(mut commands: Commands, lights: Extract<Query<RenderEntity, With<RectLight>>>) {
+    for entity in &lights {
+        if let Ok(mut e) = commands.get_entity(entity) {
+            e.remove::<ExtractedRectLight>();
         }
     }
 }

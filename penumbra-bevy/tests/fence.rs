@@ -87,6 +87,13 @@ fn traced(app: &mut App, frames: u32) -> Traced {
 fn the_plugin_traces_what_the_per_ray_oracle_sees_from_bevys_prepass() {
     let mut app = fence::app(false);
     let t = traced(&mut app, 3);
+    // The rect light is penumbra's alone: Bevy's own (unshadowed) shading of it is off.
+    let render_world = app.sub_app_mut(RenderApp).world_mut();
+    let bevy_lit = render_world
+        .query::<&bevy::pbr::ExtractedRectLight>()
+        .iter(render_world)
+        .count();
+    assert_eq!(bevy_lit, 0, "Bevy still shades {bevy_lit} rect lights itself");
     let world = app.sub_app(RenderApp).world();
     let gpu = world.resource::<PenumbraGpu>();
     let light = world.resource::<ExtractedShadowWorld>().lights[0];
