@@ -19,7 +19,7 @@ use glam::Mat4;
 use penumbra::bvh::{Bvh, BvhSettings};
 use penumbra::gpu::{
     GpuContext, GpuScene, NormalEncoding, ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets,
-    SurfaceInput,
+    SurfaceInput, read_texture,
 };
 use penumbra::output::{HdrImage, ToneMap, write_image};
 use penumbra::scene::Scene;
@@ -145,7 +145,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         ),
     );
     queue.submit([encoder.finish()]);
-    let pixels = read_rgba32f(&device, &queue, &output, width, height)?;
+    let pixels: Vec<[f32; 4]> = read_texture(&ctx, &output)?;
     let frame_ms = start.elapsed().as_secs_f64() * 1e3;
 
     let unfinished = targets.unfinished_tiles(&ctx)?;
@@ -303,51 +303,4 @@ impl Compositor {
         pass.set_bind_group(0, &bind, &[]);
         pass.draw(0..3, 0..1);
     }
-}
-
-/// Reads an `Rgba32Float` texture back (rows padded to 256 bytes for the copy, trimmed here).
-fn read_rgba32f(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    texture: &wgpu::Texture,
-    width: u32,
-    height: u32,
-) -> Result<Vec<[f32; 4]>, Box<dyn std::error::Error>> {
-    let row = width * 16;
-    let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-    let staging = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("readback"),
-        size: u64::from(padded) * u64::from(height),
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    encoder.copy_texture_to_buffer(
-        texture.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &staging,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(padded),
-                rows_per_image: None,
-            },
-        },
-        texture.size(),
-    );
-    queue.submit([encoder.finish()]);
-    let (sender, receiver) = std::sync::mpsc::channel();
-    staging.map_async(wgpu::MapMode::Read, .., move |r| {
-        let _ = sender.send(r);
-    });
-    device.poll(wgpu::PollType::wait_indefinitely())?;
-    receiver.recv()??;
-    let bytes = staging.get_mapped_range(..)?;
-    let mut pixels = Vec::with_capacity((width * height) as usize);
-    for y in 0..height as usize {
-        let start = y * padded as usize;
-        pixels.extend_from_slice(bytemuck::cast_slice::<u8, [f32; 4]>(
-            &bytes[start..start + row as usize],
-        ));
-    }
-    Ok(pixels)
 }

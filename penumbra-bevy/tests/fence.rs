@@ -9,7 +9,7 @@ mod fence;
 use bevy::prelude::*;
 use bevy::render::RenderApp;
 use penumbra::contract::layout::GBufferTexel;
-use penumbra::gpu::read_buffer;
+use penumbra::gpu::{read_buffer, read_texture};
 use penumbra::reference::shadow_per_ray::{per_ray_masks, shadow_params};
 use penumbra_bevy::render::{ExtractedShadowWorld, PenumbraGpu, ViewShadowTargets};
 
@@ -21,37 +21,6 @@ struct Traced {
     filtered: Vec<f32>,
     /// World position of each pixel's shadow-ray origin.
     points: Vec<Vec3>,
-}
-
-/// Reads an `R32Float` texture back (rows padded to 256 bytes for the copy).
-fn read_r32f(gpu: &PenumbraGpu, texture: &wgpu::Texture) -> Vec<f32> {
-    let ctx = &gpu.ctx;
-    let (w, h) = (texture.width(), texture.height());
-    let padded = (w * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("test readback"),
-        size: u64::from(padded * h),
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    encoder.copy_texture_to_buffer(
-        texture.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(padded),
-                rows_per_image: None,
-            },
-        },
-        texture.size(),
-    );
-    ctx.queue.submit([encoder.finish()]);
-    let all: Vec<f32> = read_buffer(ctx, &buffer, 0..u64::from(padded * h)).unwrap();
-    all.chunks(padded as usize / 4)
-        .flat_map(|row| row[..w as usize].to_vec())
-        .collect()
 }
 
 /// Runs `frames` frames and reads the camera's first light back.
@@ -70,7 +39,7 @@ fn traced(app: &mut App, frames: u32) -> Traced {
     Traced {
         width: targets.width(),
         masks: read_buffer(&gpu.ctx, &targets.pixels.masks, 0..pixels * 4).unwrap(),
-        filtered: read_r32f(gpu, &targets.filtered),
+        filtered: read_texture(&gpu.ctx, &targets.filtered).unwrap(),
         points: gbuffer
             .iter()
             .map(|t| Vec3::from_array(t.origin.to_array()) + origin)

@@ -107,6 +107,68 @@ pub fn read_buffer<T: Pod>(
     Ok(bytemuck::pod_collect_to_vec(&bytes))
 }
 
+/// Copies a 2-D, single-layer, single-sampled colour `texture` (which needs `COPY_SRC`) to
+/// the CPU as one `T` per texel, rows top to bottom: `T` must be the size of one texel of
+/// the texture's format (e.g. `f32` for `R32Float`, `[f32; 4]` for `Rgba32Float`).
+///
+/// Blocks until the GPU has finished all work submitted so far.
+pub fn read_texture<T: Pod>(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Vec<T>> {
+    let size = texture.size();
+    let texel = texture.format().block_copy_size(None);
+    if texel != Some(size_of::<T>() as u32)
+        || texture.dimension() != wgpu::TextureDimension::D2
+        || size.depth_or_array_layers != 1
+        || texture.sample_count() != 1
+        || !texture.usage().contains(wgpu::TextureUsages::COPY_SRC)
+    {
+        return Err(Error::Gpu(format!(
+            "cannot read back a {:?} texture ({}x{}x{}, {} samples, usage {:?}) as {}-byte texels \
+             (read_texture takes 2-D, one-layer, single-sampled COPY_SRC textures, T one texel)",
+            texture.format(),
+            size.width,
+            size.height,
+            size.depth_or_array_layers,
+            texture.sample_count(),
+            texture.usage(),
+            size_of::<T>()
+        )));
+    }
+    let row = size.width * size_of::<T>() as u32;
+    let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let staging = ctx.capture_errors("texture readback staging", || {
+        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("texture readback staging"),
+            size: u64::from(padded) * u64::from(size.height),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("texture readback"),
+            });
+        encoder.copy_texture_to_buffer(
+            texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &staging,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded),
+                    rows_per_image: None,
+                },
+            },
+            size,
+        );
+        ctx.queue.submit([encoder.finish()]);
+        staging
+    })?;
+    let bytes = map_read(ctx, &staging)?;
+    Ok(bytes
+        .chunks(padded as usize)
+        .flat_map(|r| bytemuck::pod_collect_to_vec::<u8, T>(&r[..row as usize]))
+        .collect())
+}
+
 /// Maps all of `buffer` (a `MAP_READ` buffer), waits for it and returns a copy of its bytes.
 pub(crate) fn map_read(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
     let (sender, receiver) = std::sync::mpsc::channel();

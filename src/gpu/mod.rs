@@ -31,7 +31,7 @@ mod tiling;
 mod timer;
 mod vector_variant;
 
-pub use buffers::{empty_storage_buffer, read_buffer, storage_buffer};
+pub use buffers::{empty_storage_buffer, read_buffer, read_texture, storage_buffer};
 pub use context::{
     ADAPTER_ENV, AdapterSummary, GpuContext, GpuOptions, LAVAPIPE_VECTOR_WIDTH_ENV, NO_DEVICE_SELECT_ENV,
     set_driver_defaults, set_driver_defaults_for_drawing,

@@ -17,7 +17,7 @@ use penumbra::contract::filter::FilterParams;
 use penumbra::contract::layout::GBufferTexel;
 use penumbra::gpu::{
     FrameSettings, GpuContext, GpuScene, NormalEncoding, Renderer, ShadowInputs, ShadowPass, ShadowSettings,
-    ShadowTargets, SurfaceInput, VectorVariant, read_buffer,
+    ShadowTargets, SurfaceInput, VectorVariant, read_buffer, read_texture,
 };
 use penumbra::reference::filter::discontinuity_filter;
 use penumbra::reference::visibility::visibility;
@@ -34,36 +34,6 @@ struct Embedded {
     unfiltered: Vec<f32>,
     filtered: Vec<f32>,
     unfinished: u64,
-}
-
-/// Reads an `R32Float` texture back (rows padded to 256 bytes for the copy).
-fn read_r32f(ctx: &GpuContext, texture: &wgpu::Texture) -> Vec<f32> {
-    let (w, h) = (texture.width(), texture.height());
-    let padded = (w * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("texture readback"),
-        size: u64::from(padded * h),
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    encoder.copy_texture_to_buffer(
-        texture.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(padded),
-                rows_per_image: None,
-            },
-        },
-        texture.size(),
-    );
-    ctx.queue.submit([encoder.finish()]);
-    let all: Vec<f32> = read_buffer(ctx, &buffer, 0..u64::from(padded * h)).unwrap();
-    all.chunks(padded as usize / 4)
-        .flat_map(|row| row[..w as usize].to_vec())
-        .collect()
 }
 
 /// Rasterizes `scene` seen through `view` and records the embedded pass on it, in one
@@ -147,8 +117,8 @@ fn embedded_frame_with_normals(
     Embedded {
         gbuffer: read_buffer(ctx, &targets.pixels.gbuffer, 0..pixels * 64).unwrap(),
         masks: read_buffer(ctx, &targets.pixels.masks, 0..pixels * 4).unwrap(),
-        unfiltered: read_r32f(ctx, &targets.unfiltered),
-        filtered: read_r32f(ctx, &targets.filtered),
+        unfiltered: read_texture(ctx, &targets.unfiltered).unwrap(),
+        filtered: read_texture(ctx, &targets.filtered).unwrap(),
         unfinished: targets.unfinished_tiles(ctx).unwrap(),
     }
 }
