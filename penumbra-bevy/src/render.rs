@@ -43,6 +43,8 @@ pub struct PenumbraGpu {
     pub ctx: GpuContext,
     /// The casters on the GPU, with the version it was made from.
     pub scene: Option<(u64, GpuScene)>,
+    /// The version whose scene failed to build (reported once, not retried).
+    failed_version: Option<u64>,
     /// One pass per distinct camera setting.
     passes: Vec<(ShadowSettings, ShadowPass)>,
     composite: Composite,
@@ -88,6 +90,7 @@ fn init_gpu(mut commands: Commands, device: Res<RenderDevice>, queue: Res<Render
     commands.insert_resource(PenumbraGpu {
         ctx,
         scene: None,
+        failed_version: None,
         passes: Vec::new(),
         composite,
     });
@@ -170,6 +173,7 @@ fn prepare(
     let version = world.version;
     match (&world.scene, &mut gpu.scene) {
         (None, _) => gpu.scene = None,
+        (Some(_), _) if gpu.failed_version == Some(version) => {}
         (Some(scene), current) if current.as_ref().is_none_or(|(v, _)| *v != version) => {
             let built = Bvh::build(scene, &BvhSettings::default())
                 .and_then(|bvh| GpuScene::with_motion(&gpu.ctx, scene, &bvh, MotionSettings::default()));
@@ -178,6 +182,7 @@ fn prepare(
                 Err(e) => {
                     error!("penumbra: the shadow casters' scene could not be built: {e}");
                     *current = None;
+                    gpu.failed_version = Some(version);
                 }
             }
         }
@@ -231,6 +236,14 @@ fn camera_matrices(view: &ExtractedView) -> (glam::Mat4, glam::Mat4) {
     )
 }
 
+/// The view's depth and normal prepass textures, when it has both.
+fn prepass_textures(prepass: &ViewPrepassTextures) -> Option<(&wgpu::Texture, &wgpu::Texture)> {
+    Some((
+        &prepass.depth.as_ref()?.texture.texture,
+        &prepass.normal.as_ref()?.texture.texture,
+    ))
+}
+
 fn trace(
     view: ViewQuery<(
         &ViewPrepassTextures,
@@ -246,20 +259,20 @@ fn trace(
     let (Some((_, scene)), Some(pass)) = (&gpu.scene, gpu.pass(&settings.pass_settings())) else {
         return;
     };
-    let (Some(depth), Some(normal)) = (&prepass.depth, &prepass.normal) else {
+    let Some((depth, normal)) = prepass_textures(prepass) else {
         return;
     };
     let (view_matrix, projection) = camera_matrices(extracted);
     for (light, targets) in world.lights.iter().zip(&targets.0) {
         let inputs = ShadowInputs {
             surface: SurfaceInput::Depth {
-                texture: &depth.texture.texture,
+                texture: depth,
                 view: view_matrix,
                 projection,
                 // Bevy's projections are reversed-Z: the depth buffer is cleared to 0.
                 background_depth: 0.0,
             },
-            normal: &normal.texture.texture,
+            normal,
             geometric_normal: None,
             normal_encoding: NormalEncoding::Biased,
             light,
@@ -285,10 +298,10 @@ fn composite(
     mut ctx: RenderContext,
 ) {
     let (target, prepass, extracted, camera, settings, targets) = view.into_inner();
-    let (Some(depth), Some(normal)) = (&prepass.depth, &prepass.normal) else {
+    let Some((depth, normal)) = prepass_textures(prepass) else {
         return;
     };
-    if depth.texture.texture.sample_count() != 1 {
+    if depth.sample_count() != 1 {
         error_once!("penumbra: a camera with PenumbraShadows renders with MSAA; put Msaa::Off on it");
         return;
     }
@@ -307,8 +320,8 @@ fn composite(
             ctx.command_encoder(),
             target.main_texture_view(),
             &crate::composite::CompositeInputs {
-                depth: &depth.texture.texture,
-                normal: &normal.texture.texture,
+                depth,
+                normal,
                 visibility: traced.then_some(&targets.filtered),
                 world_from_clip: (projection * view_matrix).inverse(),
                 light,

@@ -163,7 +163,7 @@ impl ShadowPass {
     /// limit (checked before any pipeline is made); [`Error::Gpu`] when a forced subgroup
     /// variant does not fit the device's subgroup size or a pipeline fails to build.
     pub fn new(ctx: &GpuContext, settings: ShadowSettings) -> Result<ShadowPass> {
-        check_device(&ctx.device, &settings)?;
+        ShadowPass::check_device(&ctx.device, &settings)?;
         let kernel = |name: &str| Kernel::new(ctx, name, &[], &[], Checks::Checked);
         Ok(ShadowPass {
             device: ctx.device.clone(),
@@ -183,11 +183,33 @@ impl ShadowPass {
         })
     }
 
-    /// Whether `device` has what a pass with `settings` needs: [`Error::DeviceUnsupported`]
-    /// listing every missing feature and too-small limit, as [`ShadowPass::new`] reports
-    /// it. For hosts that check before they build (Bevy's `Plugin::finish`).
+    /// Whether `device` has what a pass with `settings` needs (subgroups too when `settings`
+    /// force the subgroup variant): [`Error::DeviceUnsupported`] listing every missing
+    /// feature and too-small limit, as [`ShadowPass::new`] reports it. For hosts that check
+    /// before they build (Bevy's `Plugin::finish`).
     pub fn check_device(device: &wgpu::Device, settings: &ShadowSettings) -> Result<()> {
-        check_device(device, settings)
+        let mut missing = Vec::new();
+        let mut features = ShadowPass::required_features();
+        if settings.variant == Some(VectorVariant::Subgroup) {
+            features |= wgpu::Features::SUBGROUP;
+        }
+        let absent = features - device.features();
+        for (name, _) in absent.iter_names() {
+            missing.push(format!("feature {name}"));
+        }
+        ShadowPass::required_limits().check_limits_with_fail_fn(
+            &device.limits(),
+            false,
+            |name, needed, has| missing.push(format!("{name} {has} (needs {needed})")),
+        );
+        if missing.is_empty() {
+            Ok(())
+        } else {
+            Err(Error::DeviceUnsupported {
+                what: "the embedded shadow pass".to_owned(),
+                missing,
+            })
+        }
     }
 
     /// The settings the pass was built with.
@@ -345,31 +367,6 @@ impl ShadowPass {
         self.to_texture
             .record(encoder, "embed/visibility", &bind, None, groups);
         Ok(())
-    }
-}
-
-/// [`Error::DeviceUnsupported`] unless `device` has the pass's features and limits (and
-/// subgroups when `settings` force the subgroup variant).
-fn check_device(device: &wgpu::Device, settings: &ShadowSettings) -> Result<()> {
-    let mut missing = Vec::new();
-    let mut features = ShadowPass::required_features();
-    if settings.variant == Some(VectorVariant::Subgroup) {
-        features |= wgpu::Features::SUBGROUP;
-    }
-    let absent = features - device.features();
-    for (name, _) in absent.iter_names() {
-        missing.push(format!("feature {name}"));
-    }
-    ShadowPass::required_limits().check_limits_with_fail_fn(&device.limits(), false, |name, needed, has| {
-        missing.push(format!("{name} {has} (needs {needed})"))
-    });
-    if missing.is_empty() {
-        Ok(())
-    } else {
-        Err(Error::DeviceUnsupported {
-            what: "the embedded shadow pass".to_owned(),
-            missing,
-        })
     }
 }
 
