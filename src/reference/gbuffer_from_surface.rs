@@ -99,6 +99,19 @@ mod tests {
     }
 
     #[test]
+    fn biased_normals_decode_to_signed_ones_and_signed_ones_pass_unchanged() {
+        let mut p = params();
+        let n = Vec3::new(0.6, -0.8, 0.0);
+        assert_eq!(decode_normal(&p, n), n);
+        p.normal_encoding = NORMALS_BIASED;
+        // 0.8, 0.1, 0.5 are n · ½ + ½; the decode is exact in f32 for these values.
+        assert_eq!(
+            decode_normal(&p, Vec3::new(0.8, 0.1, 0.5)),
+            Vec3::new(0.6, -0.8, 0.0)
+        );
+    }
+
+    #[test]
     fn unprojecting_a_projected_point_gives_it_back() {
         let p = params();
         let view_proj = (Mat4::from_translation(p.eye) * Mat4::from_cols_array_2d(&p.clip_to_eye)).inverse();
