@@ -1,7 +1,7 @@
 // Refinement, step 3 of 3: after the shadow tracer traced the sample image of refine_gather,
-// each listed pixel of the chunk counts the blocked rays of its tile's 16 masks (its 256
-// light samples) and overwrites the filter's output with irradiance × (256 − blocked) / 256:
-// the whole interleaved pattern that the filter's window could not gather there.
+// each listed pixel of the chunk counts the blocked rays of the `sets` masks of its block of its
+// tile (16 rays each) and overwrites the filter's output with irradiance × (n − blocked) / n, n = 16 sets
+// rays: with 16 sets the whole interleaved pattern that the filter's window could not gather there.
 // Dispatched by the renderer, ceil(slots / LINE_GROUP) workgroups.
 // CPU twin: src/reference/refine.rs (resolve).
 
@@ -25,15 +25,17 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let width = 4u * params.tiles_x;
-    let x0 = (slot % params.tiles_x) * 4u;
-    let y0 = (slot / params.tiles_x) * 4u;
+    let per_tile = 16u / params.sets;
+    let tile = slot / per_tile;
+    let x0 = (tile % params.tiles_x) * 4u;
+    let y0 = (tile / params.tiles_x) * 4u;
+    let first_set = (slot % per_tile) * params.sets;
     var blocked = 0u;
-    for (var y = y0; y < y0 + 4u; y++) {
-        for (var x = x0; x < x0 + 4u; x++) {
-            blocked += countOneBits(sample_masks[y * width + x] & 0xffffu);
-        }
+    for (var s = first_set; s < first_set + params.sets; s++) {
+        blocked += countOneBits(sample_masks[(y0 + s / 4u) * width + x0 + s % 4u] & 0xffffu);
     }
     let pixel = list[2u + params.first_slot + slot];
-    let visibility = f32(256u - blocked) / 256.0;
+    let rays = 16u * params.sets;
+    let visibility = f32(rays - blocked) / f32(rays);
     filtered[pixel] = vec4<f32>(unshadowed_irradiance(shade, gbuffer[pixel]) * visibility, visibility);
 }

@@ -1,7 +1,8 @@
 //! `penumbra quality`: how close each way of computing visibility gets to the
 //! exact answer (beam splitting) on the same G-buffer: MFT 16 spp with and
-//! without the filter, filtered and refined, and the reference tracer at 64 and
-//! 256 rays per pixel;
+//! without the filter, filtered and refined (fully, and within a ray budget with all 16 and
+//! with fewer sample sets per refined pixel), and the reference tracer at 64 and 256 rays
+//! per pixel;
 //! then where each one's error lies ([`penumbra::quality::error_regions`]).
 
 use std::path::PathBuf;
@@ -43,6 +44,14 @@ pub struct QualityArgs {
     /// Filter: neighbours whose normal has a smaller dot product with the pixel's are ignored.
     #[arg(long, default_value_t = penumbra::contract::filter::FilterParams::DEFAULT_NORMAL_TOLERANCE)]
     normal_tolerance: f32,
+    /// Ray budget of the budgeted refinement (`mft-16-refined-RAYS`): average rays per pixel
+    /// with geometry, the frame's 16 included.
+    #[arg(long, value_name = "RAYS", default_value_t = 24.0)]
+    ray_budget: f32,
+    /// The budgeted refinement also runs with refined pixels tracing N of the 16 sample sets
+    /// (`mft-16-refined-RAYS-sN`; 1, 2, 4 or 8; 16: only the all-sets run).
+    #[arg(long, value_name = "N", default_value_t = 8)]
+    refine_sets: u32,
     /// Give up on the exact visibility (an error) after this many seconds.
     #[arg(long, default_value_t = 1800.0)]
     time_budget: f64,
@@ -113,6 +122,7 @@ fn print_regions(results: &[MethodResult]) {
 
 /// Renders every method, prints its errors against exact visibility.
 pub fn run(args: &QualityArgs) -> Result<()> {
+    super::render::check_refine_args(Some(args.ray_budget), args.refine_sets)?;
     let (w, h) = args.size;
     let (scene, view) = load_scene_and_view(args.scene.as_deref(), args.view.as_deref())?;
     let bvh = Bvh::build(&scene, &args.bvh.settings())?;
@@ -165,7 +175,6 @@ pub fn run(args: &QualityArgs) -> Result<()> {
     progress!("rendering MFT 16 spp + refinement…\r");
     settings.refine = true;
     let refined = mft.render(&ctx, &gpu_scene, &view, &settings)?;
-    settings.refine = false;
     let refined_share = refined.refined.iter().filter(|&&r| r).count() as f64 / hits as f64;
     methods.push((
         "mft-16-refined".into(),
@@ -173,6 +182,31 @@ pub fn run(args: &QualityArgs) -> Result<()> {
         refined.pass_ms("shadow") + refined.pass_ms("filter") + refined.pass_ms("refine"),
         16.0 + 256.0 * refined_share,
     ));
+    // Within the ray budget: all 16 sets per refined pixel, and `--refine-sets` of them.
+    let budget = args.ray_budget;
+    settings.ray_budget = Some(budget);
+    let mut set_counts = vec![16];
+    if args.refine_sets != 16 {
+        set_counts.push(args.refine_sets);
+    }
+    for sets in set_counts {
+        progress!("rendering MFT 16 spp + refinement ({sets} sets) within {budget} rays per pixel…\r");
+        settings.refine_sets = sets;
+        let budgeted = mft.render(&ctx, &gpu_scene, &view, &settings)?;
+        let share = budgeted.refined.iter().filter(|&&r| r).count() as f64 / hits as f64;
+        methods.push((
+            match sets {
+                16 => format!("mft-16-refined-{budget}"),
+                _ => format!("mft-16-refined-{budget}-s{sets}"),
+            },
+            budgeted.filtered.iter().map(|v| v[3]).collect(),
+            budgeted.pass_ms("shadow") + budgeted.pass_ms("filter") + budgeted.pass_ms("refine"),
+            16.0 + f64::from(16 * sets) * share,
+        ));
+    }
+    settings.ray_budget = None;
+    settings.refine_sets = 16;
+    settings.refine = false;
     settings.filter = None;
     settings.keep_gbuffer = false;
     for rays in [64, 256] {

@@ -6,6 +6,7 @@ use std::time::Instant;
 use penumbra::bvh::Bvh;
 use penumbra::contract::filter::FilterParams;
 use penumbra::contract::layout::MASK_SKY;
+use penumbra::contract::refine::REFINE_SET_COUNTS;
 use penumbra::gpu::{
     Ambient, FrameSettings, GpuContext, GpuOptions, GpuScene, LeafMode, Phase, PrimaryTracer, Renderer,
     RendererOptions, Tracer, VectorVariant, image_of_lights,
@@ -132,6 +133,16 @@ pub struct RenderArgs {
     /// exact visibility, for more rays (mft, packet and per-ray; needs the filter).
     #[arg(long, conflicts_with = "no_filter")]
     refine: bool,
+    /// With --refine: trace at most RAYS shadow rays per pixel with geometry on average (the
+    /// frame's 16 included; a refined pixel costs 256), refining first the pixels whose
+    /// filtered visibility is furthest from the mean of the unfiltered ones around them.
+    #[arg(long, value_name = "RAYS", requires = "refine")]
+    ray_budget: Option<f32>,
+    /// With --refine: how many of the 16 sample sets (16 rays each) a refined pixel traces:
+    /// 1, 2, 4, 8 or 16 (all 256 light samples). Fewer refine more pixels within a
+    /// --ray-budget, each less exactly.
+    #[arg(long, value_name = "N", default_value_t = 16, requires = "refine")]
+    refine_sets: u32,
     /// Filter: neighbours whose depth differs by more than this fraction of the pixel's are ignored.
     #[arg(long, default_value_t = FilterParams::DEFAULT_DEPTH_TOLERANCE)]
     depth_tolerance: f32,
@@ -240,6 +251,24 @@ fn aov_path(output: &Path, name: &str) -> PathBuf {
     output.with_file_name(format!("{stem}.{name}.exr"))
 }
 
+/// Checks `--ray-budget` and `--refine-sets` (render's and quality's) before anything runs,
+/// so that a bad value is named by its flag.
+pub(super) fn check_refine_args(budget: Option<f32>, sets: u32) -> Result<()> {
+    if let Some(budget) = budget.filter(|b| !(b.is_finite() && *b >= 16.0)) {
+        return Err(Error::invalid(
+            "--ray-budget",
+            format!("{budget}: the budget is a number of rays per pixel ≥ 16 (the frame's own rays)"),
+        ));
+    }
+    if !REFINE_SET_COUNTS.contains(&sets) {
+        return Err(Error::invalid(
+            "--refine-sets",
+            format!("{sets}: a refined pixel traces 1, 2, 4, 8 or 16 of the 16 sample sets"),
+        ));
+    }
+    Ok(())
+}
+
 /// Renders and writes the image(s), printing what ran and how long it took.
 pub fn run(args: &RenderArgs) -> Result<()> {
     if args.refine
@@ -253,6 +282,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             "only the mft, packet, per-ray, ray-query and embree tracers are refined (exact and reference are not filtered)",
         ));
     }
+    check_refine_args(args.ray_budget, args.refine_sets)?;
     let embree = args.tracer == TracerArg::Embree;
     let tracer = match args.tracer {
         TracerArg::Gpu(tracer) => tracer,
@@ -347,6 +377,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let gpu_scene = GpuScene::new(&ctx, &scene, &bvh)?;
     let mut settings = FrameSettings::new(width, height);
     settings.refine = args.refine;
+    settings.ray_budget = args.ray_budget;
+    settings.refine_sets = args.refine_sets;
     if args.no_filter || matches!(tracer, Tracer::Reference { .. }) {
         settings.filter = None;
     } else {
@@ -412,10 +444,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
         if args.refine {
             let refined = frame.refined.iter().filter(|&&r| r).count();
+            let share = refined as f64 / hits.max(1.0);
+            let rays = 16 * args.refine_sets;
             println!(
-                "refine    {}: {refined} px ({:.1} % of those with geometry) traced all 256 rays{light}",
+                "refine    {}: {refined} px ({:.1} % of those with geometry) traced {rays} rays each, \
+                 {:.1} rays per pixel with geometry in all{light}",
                 gpu_ms(frame.timed_ms("refine")),
-                100.0 * refined as f64 / hits.max(1.0)
+                100.0 * share,
+                16.0 + f64::from(rays) * share
             );
         }
     }

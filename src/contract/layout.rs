@@ -283,9 +283,12 @@ pub struct ShadeParams {
 }
 
 /// How the refinement lays its listed pixels out as a sample image for the shadow
-/// tracer, 16 bytes (WGSL `RefineParams` in `shaders/shared/refine.wgsl`): listed pixel
-/// `first_slot + s` becomes 4×4 tile `s` (row-major, `tiles_x` per row), each of its 16
-/// pixels a copy of the pixel's G-buffer texel, so the tile traces all 16 sample sets.
+/// tracer, 16 bytes (WGSL `RefineParams` in `shaders/shared/refine.wgsl`). Each 4×4 tile
+/// (row-major, `tiles_x` per row) holds `16 / sets` listed pixels: slot `first_slot + e`
+/// goes to tile `e / (16 / sets)`, block `j = e mod (16 / sets)`, and tile pixel
+/// `t = x + 4·y` (which traces sample set `t`) is a copy of its G-buffer texel when
+/// `t / sets == j`. So a pixel traces sets `j·sets .. (j + 1)·sets` (all 16 when `sets`
+/// is 16); tile pixels past the last slot are sky.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
 pub struct RefineParams {
@@ -294,16 +297,22 @@ pub struct RefineParams {
     /// List slot of tile 0 (bytes 4..8).
     pub first_slot: u32,
     /// Listed pixels in this sample image (bytes 8..12); the image is
-    /// `4 · ceil(slots / tiles_x)` pixels high.
+    /// `4 · ceil(tiles / tiles_x)` pixels high, `tiles = ceil(slots / (16 / sets))`.
     pub slots: u32,
-    /// Unused (bytes 12..16).
-    pub pad: u32,
+    /// Sample sets each listed pixel traces, a power of two ≤ 16 (bytes 12..16).
+    pub sets: u32,
 }
 
 impl RefineParams {
+    /// Listed pixels per tile: `16 / sets`.
+    pub fn pixels_per_tile(&self) -> u32 {
+        16 / self.sets.clamp(1, 16)
+    }
+
     /// Width and height of the sample image in pixels.
     pub fn image_size(&self) -> (u32, u32) {
-        (4 * self.tiles_x, 4 * self.slots.div_ceil(self.tiles_x.max(1)))
+        let tiles = self.slots.div_ceil(self.pixels_per_tile());
+        (4 * self.tiles_x, 4 * tiles.div_ceil(self.tiles_x.max(1)))
     }
 }
 
@@ -628,7 +637,7 @@ mod tests {
                 tiles_x,
                 first_slot,
                 slots,
-                pad
+                sets
             }),
         );
     }

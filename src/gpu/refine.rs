@@ -1,22 +1,29 @@
 //! The refinement pass: after the filter, the pixels where visibility changes around them
-//! and the filter's window is cut or their own rays agree get all 256 light samples, and their filtered value
-//! becomes the 256-ray one (see [`crate::reference::refine`], the CPU twin, for why and
-//! which pixels).
+//! and the filter's window is cut or their own rays agree get all 256 light samples (or the
+//! first [`super::FrameSettings::refine_sets`] of the 16 sets), and their filtered value
+//! becomes the one of those rays (see [`crate::reference::refine`], the CPU twin, for why
+//! and which pixels).
 //!
 //! Three kernels and the frame's own shadow tracer: `refine_select` lists the pixels (one
 //! invocation per pixel); the host reads how many; per chunk of the list, `refine_gather`
 //! builds a *sample image* in which each listed pixel is a 4×4 tile of copies of its
-//! G-buffer texel (so the tile's 16 pixels trace the 16 sample sets), the shadow tracer
+//! G-buffer texel (so the tile's 16 pixels trace the 16 sample sets; with fewer sets the
+//! rest of the tile is sky), the shadow tracer
 //! (multi-frusta, packet or per-ray, as for the frame) traces it like any image, and
-//! `refine_resolve` sums each tile's 16 masks into its pixel's value. The multi-frusta
+//! `refine_resolve` sums each tile's masks into its pixel's value. The multi-frusta
 //! kernel then traces a pixel's 256 rays as one vector of 16 frusta that share their
 //! origin, and its masks are the oracle's, as for every frame.
+//!
+//! Under a ray budget ([`super::FrameSettings::ray_budget`]) the host reads the list and the
+//! score `refine_select` gave each pixel, keeps the [`budget_pixels`] with the highest scores
+//! ([`within_budget`]) and writes them back before the gather.
 
 use super::kernel::{Checks, Kernel, buffer, uniform_buffer};
 use super::pixel_buffers::PixelBuffers;
 use super::{GpuContext, GpuScene, GpuTimer, ShadowImage, ShadowTracer, empty_storage_buffer, read_buffer};
 use crate::contract::groups::{LINE_GROUP, PIXEL_GROUP};
 use crate::contract::layout::{GBufferTexel, RefineParams, ShadowParams};
+use crate::contract::refine::{budget_pixels, within_budget};
 use crate::sampling::SETS;
 use crate::{Error, Result};
 
@@ -61,15 +68,21 @@ impl Refinement {
     }
 
     /// Refines the frame of `b` (its filter submitted), tracing with
-    /// `tracer`. Returns the refined pixels' indices (row-major), sorted. Every dispatch,
+    /// `tracer`, each refined pixel tracing sample sets `0..sets`; with a ray `budget`
+    /// (average rays per pixel with geometry, the frame's 16 included) only the
+    /// highest-scoring pixels it allows. Returns the refined pixels'
+    /// indices (row-major), sorted. Every dispatch,
     /// the tracer's included, is timed as `refine`; `progress` gets the tracer's progress
     /// over each chunk's sample image.
+    #[allow(clippy::too_many_arguments)]
     pub fn run(
         &self,
         ctx: &GpuContext,
         scene: &GpuScene,
         tracer: &ShadowTracer,
         b: &RefineBuffers<'_>,
+        budget: Option<f32>,
+        sets: u32,
         timer: &mut GpuTimer,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<Vec<u32>> {
@@ -77,6 +90,7 @@ impl Refinement {
         let pixels = u64::from(width) * u64::from(height);
         let rw = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
         let list = empty_storage_buffer(ctx, "refine list", (2 + pixels) * 4, rw)?;
+        let scores = empty_storage_buffer(ctx, "refine scores", pixels * 4, wgpu::BufferUsages::COPY_SRC)?;
 
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         let p = b.pixels;
@@ -88,6 +102,8 @@ impl Refinement {
                 buffer("depth", &p.depth),
                 buffer("normal", &p.normal),
                 buffer("list", &list),
+                buffer("filtered", &p.filtered),
+                buffer("scores", &scores),
             ],
         )?;
         let writes = timer.pass_writes("refine");
@@ -95,29 +111,54 @@ impl Refinement {
         self.select
             .record(&mut encoder, "refine select", &bind, writes, groups);
         ctx.queue.submit([encoder.finish()]);
-        let listed = read_buffer::<u32>(ctx, &list, 0..4)?[0];
+        let header = read_buffer::<u32>(ctx, &list, 0..8)?;
+        let (mut listed, geometry) = (header[0], header[1]);
+        let keep = budget.map_or(listed, |b| budget_pixels(b, geometry, sets).min(listed));
+        // Under a budget that binds, or when a tile holds several pixels (each tracing the
+        // sets of its place in the list), the list is cut and put in pixel order.
+        if listed > 0 && (keep < listed || sets < SETS as u32) {
+            let slots = u64::from(listed) * 4;
+            let pixels = read_buffer::<u32>(ctx, &list, 8..8 + slots)?;
+            let scores = read_buffer::<f32>(ctx, &scores, 0..slots)?;
+            let pairs: Vec<(u32, f32)> = pixels.into_iter().zip(scores).collect();
+            let kept = within_budget(&pairs, keep);
+            listed = kept.len() as u32;
+            ctx.queue.write_buffer(&list, 0, bytemuck::bytes_of(&listed));
+            if listed > 0 {
+                ctx.queue.write_buffer(&list, 8, bytemuck::cast_slice(&kept));
+            }
+        }
         if listed == 0 {
             return Ok(Vec::new());
         }
 
-        // Chunks whose sample image (16 texels per listed pixel) fits one storage binding.
+        // Chunks whose sample image (16 texels per tile) fits one storage binding, whole
+        // rows of whole tiles (so every chunk's first slot starts a tile).
+        let per_tile = RefineParams {
+            sets,
+            ..RefineParams::default()
+        }
+        .pixels_per_tile();
+        let tiles = listed.div_ceil(per_tile);
         let texel = size_of::<GBufferTexel>() as u64;
-        let tiles_x = SAMPLE_TILES_X.min(listed);
+        let tiles_x = SAMPLE_TILES_X.min(tiles);
         let fit = ctx.info.max_storage_buffer_binding_size / (SETS as u64 * texel);
         // The resolve dispatch has one invocation per slot, 64 per workgroup, along x.
-        let fit = fit.min(u64::from(ctx.info.max_compute_workgroups_per_dimension) * 64);
-        let chunk = (fit.min(u64::from(listed)) as u32 / tiles_x * tiles_x).max(tiles_x);
+        let fit =
+            fit.min(u64::from(ctx.info.max_compute_workgroups_per_dimension) * 64 / u64::from(per_tile));
+        let chunk_tiles = (fit.min(u64::from(tiles)) as u32 / tiles_x * tiles_x).max(tiles_x);
         if u64::from(tiles_x) > fit {
             return Err(Error::Gpu(format!(
-                "refinement: a sample image row of {tiles_x} pixels does not fit one storage buffer"
+                "refinement: a sample image row of {tiles_x} tiles does not fit one storage buffer"
             )));
         }
+        let chunk = chunk_tiles * per_tile;
         for first_slot in (0..listed).step_by(chunk as usize) {
             let params = RefineParams {
                 tiles_x,
                 first_slot,
                 slots: chunk.min(listed - first_slot),
-                pad: 0,
+                sets,
             };
             self.trace_chunk(ctx, scene, tracer, b, &list, &params, timer, progress)?;
         }

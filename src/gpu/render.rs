@@ -17,9 +17,11 @@ use crate::contract::ITERATION_BUDGET;
 use crate::contract::filter::FilterParams;
 use crate::contract::groups::PIXEL_GROUP;
 use crate::contract::layout::{CameraParams, GBufferTexel};
+use crate::contract::refine::REFINE_SET_COUNTS;
 use crate::contract::shade::shade_params;
 use crate::contract::shadow::shadow_params;
 use crate::pass_inputs::{RAY_OFFSET_FRACTION, camera_params, tile_camera};
+use crate::sampling::SAMPLES_PER_SET;
 use crate::scene::view::View;
 use crate::{Error, Result};
 
@@ -236,6 +238,31 @@ impl Renderer {
                 "refinement needs an interleaved tracer (mft, packet or per-ray), not the reference tracer",
             ));
         }
+        if !REFINE_SET_COUNTS.contains(&settings.refine_sets) {
+            return Err(Error::invalid(
+                "FrameSettings::refine_sets",
+                format!(
+                    "{} sample sets: a refined pixel traces 1, 2, 4, 8 or 16 of the 16 sets",
+                    settings.refine_sets
+                ),
+            ));
+        }
+        if let Some(budget) = settings.ray_budget {
+            if !settings.refine {
+                return Err(Error::invalid(
+                    "FrameSettings::ray_budget",
+                    "a ray budget limits the refinement: set FrameSettings::refine too",
+                ));
+            }
+            if !(budget.is_finite() && budget >= SAMPLES_PER_SET as f32) {
+                return Err(Error::invalid(
+                    "FrameSettings::ray_budget",
+                    format!(
+                        "{budget} rays per pixel: the budget must be a number ≥ {SAMPLES_PER_SET}, the frame's own rays"
+                    ),
+                ));
+            }
+        }
         let limit = ctx.device.limits().max_texture_dimension_2d;
         if w > limit || h > limit {
             return Err(Error::Gpu(format!(
@@ -448,6 +475,8 @@ impl Renderer {
                 &shadow,
                 &shade_buf,
                 &filter,
+                settings.ray_budget,
+                settings.refine_sets,
                 timer,
                 &mut refine_progress,
             )? {

@@ -24,6 +24,17 @@ pub struct FrameSettings {
     /// their own rays agree (the CPU twin: `crate::reference::refine`). Needs the filter and an interleaved tracer (not
     /// [`Tracer::Reference`]).
     pub refine: bool,
+    /// With [`Self::refine`]: trace on average at most this many rays per pixel with
+    /// geometry, the frame's 16 included (each refined pixel costs 256), refining the
+    /// pixels whose filtered value is furthest from the mean of the unfiltered ones around
+    /// them first (`crate::reference::refine::refine_score`). `None`: refine every pixel
+    /// the rule picks. At least 16 and finite; applies per tile of a tiled frame.
+    pub ray_budget: Option<f32>,
+    /// With [`Self::refine`]: how many of the 16 sample sets (16 rays each) a refined pixel
+    /// traces, 1, 2, 4, 8 or 16 (the default: all 256 light samples). Fewer sets refine
+    /// twice as many pixels per halving within a [`Self::ray_budget`], each with a noisier
+    /// value (16 · sets rays, none from its neighbours).
+    pub refine_sets: u32,
 }
 
 impl FrameSettings {
@@ -39,6 +50,8 @@ impl FrameSettings {
             keep_gbuffer: false,
             max_tile: None,
             refine: false,
+            ray_budget: None,
+            refine_sets: 16,
         }
     }
 }

@@ -133,7 +133,9 @@ impl ShadowStages {
     }
 
     /// Runs the refinement on a frame whose filter was submitted (see [`Refinement::run`]):
-    /// `shadow` and `shade_params` are the frame's, `filter` its filter's parameters.
+    /// `shadow` and `shade_params` are the frame's, `filter` its filter's parameters,
+    /// `budget` the ray budget ([`super::FrameSettings::ray_budget`]), `sets` the sample sets
+    /// each refined pixel traces ([`super::FrameSettings::refine_sets`]).
     /// Returns the refined pixels' indices, sorted.
     #[allow(clippy::too_many_arguments)]
     pub fn refine(
@@ -145,6 +147,8 @@ impl ShadowStages {
         shadow: &ShadowParams,
         shade_params: &wgpu::Buffer,
         filter: &FilterParams,
+        budget: Option<f32>,
+        sets: u32,
         timer: &mut GpuTimer,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<Vec<u32>> {
@@ -163,6 +167,6 @@ impl ShadowStages {
             pixels,
             light_points,
         };
-        refinement.run(ctx, scene, &self.tracer, &buffers, timer, progress)
+        refinement.run(ctx, scene, &self.tracer, &buffers, budget, sets, timer, progress)
     }
 }

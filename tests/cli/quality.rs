@@ -44,16 +44,29 @@ fn quality_reports_every_method_on_the_generated_scenes() {
                 "mft-16-filtered",
                 "mft-16",
                 "mft-16-refined",
+                "mft-16-refined-24",
+                "mft-16-refined-24-s8",
                 "reference-64",
                 "reference-256"
             ]
         );
         let rmse = |i: usize| methods[i]["rmse"].as_f64().unwrap();
         let rays = |i: usize| methods[i]["rays_per_pixel"].as_f64().unwrap();
-        assert_eq!([rays(0), rays(1), rays(3), rays(4)], [16.0, 16.0, 64.0, 256.0]);
+        assert_eq!([rays(0), rays(1), rays(5), rays(6)], [16.0, 16.0, 64.0, 256.0]);
         // The refinement adds 256 rays at some, not all, pixels; and lowers the error.
         assert!(rays(2) > 16.0 && rays(2) < 256.0, "{scene}: {}", rays(2));
         assert!(rmse(2) < rmse(0), "{scene}: {stdout}");
+        // Within the default budget of 24 rays per pixel: fewer rays than the whole
+        // refinement, some refined all the same, and less error than the filter alone.
+        for i in [3, 4] {
+            assert!(
+                rays(i) > 16.0 && rays(i) <= 24.0 && rays(i) < rays(2),
+                "{scene} {}: {}",
+                names[i],
+                rays(i)
+            );
+            assert!(rmse(i) < rmse(0), "{scene} {}: {stdout}", names[i]);
+        }
         for (i, name) in names.iter().enumerate() {
             assert!(
                 rmse(i).is_finite() && rmse(i) > 0.0 && rmse(i) < 0.5,
@@ -62,7 +75,7 @@ fn quality_reports_every_method_on_the_generated_scenes() {
             );
         }
         // More rays, less error: a sanity check on the yardstick itself.
-        assert!(rmse(4) < rmse(3) && rmse(3) < rmse(1), "{scene}: {stdout}");
+        assert!(rmse(6) < rmse(5) && rmse(5) < rmse(1), "{scene}: {stdout}");
         assert!(report["pixels"].as_u64().unwrap() > 48 * 40 / 2);
         // Each method's error split by region: four regions, pixel and error shares
         // summing to 1, and the regions' RMSEs recombining to the method's.

@@ -16,7 +16,7 @@ use penumbra::gpu::{Frame, FrameSettings, GpuScene, Renderer, RendererOptions, T
 use penumbra::quality::metrics::ImageMetrics;
 use penumbra::reference::exact::exact_visibility_image;
 use penumbra::reference::filter::discontinuity_filter;
-use penumbra::reference::refine::refine_image;
+use penumbra::reference::refine::{budget_pixels, refine_image, refine_score, refined_pixels, refined_value};
 use penumbra::reference::shade::shade_params;
 use penumbra::reference::shadow_per_ray::{reference_counts, reference_visibility, shadow_params};
 use penumbra::sampling;
@@ -44,7 +44,12 @@ fn unrefined(renderer: &Renderer, scene: &GpuScene, view: &View, w: u32, h: u32)
 /// The CPU twin's filtered-and-refined image for a GPU frame, from the frame's own
 /// G-buffer, masks and unfiltered values (each checked against its twin by other tests),
 /// and which pixels it refined.
-fn cpu_refined(frame: &Frame, bvh: &Bvh, view: &View) -> (Vec<[f32; 4]>, Vec<bool>) {
+fn cpu_refined(
+    frame: &Frame,
+    bvh: &Bvh,
+    view: &View,
+    settings: &FrameSettings,
+) -> (Vec<[f32; 4]>, Vec<bool>) {
     let (w, h) = (frame.width, frame.height);
     let gbuffer = frame.gbuffer.as_ref().expect("kept G-buffer");
     let params = FilterParams::new(w, h);
@@ -60,6 +65,8 @@ fn cpu_refined(frame: &Frame, bvh: &Bvh, view: &View) -> (Vec<[f32; 4]>, Vec<boo
         &sampling::light_points(&view.light),
         &shadow_params(&view.light, w, h),
         &shade_params(&view.light, w, h),
+        settings.ray_budget,
+        settings.refine_sets,
         &mut filtered,
     );
     (filtered, refined)
@@ -96,7 +103,7 @@ fn refinement_matches_cpu_twin() {
         let frame = renderer
             .render(ctx(), &gpu_scene, &view, &refined_settings(w, h))
             .unwrap_or_else(|e| panic!("{}: {e}", s.name));
-        let (cpu, cpu_refined) = cpu_refined(&frame, &bvh, &view);
+        let (cpu, cpu_refined) = cpu_refined(&frame, &bvh, &view, &refined_settings(w, h));
         let refined = frame.refined.iter().filter(|&&r| r).count();
         let geometry = frame.masks.iter().filter(|&&m| m & MASK_SKY == 0).count();
         eprintln!(
@@ -148,6 +155,193 @@ fn refinement_matches_cpu_twin() {
         "refinement_matches_cpu_twin: {:.1} s",
         start.elapsed().as_secs_f64()
     );
+}
+
+#[test]
+fn refinement_with_fewer_sets_matches_cpu_twin() {
+    let (w, h) = (64, 48);
+    let renderer = Renderer::new(ctx(), None).unwrap();
+    let (scene, view) = embedded(assets::EMBEDDED_SCENES[0].name);
+    let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
+    let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
+    let all = renderer
+        .render(ctx(), &gpu_scene, &view, &refined_settings(w, h))
+        .unwrap();
+    for sets in [1, 4, 8] {
+        let settings = FrameSettings {
+            refine_sets: sets,
+            ..refined_settings(w, h)
+        };
+        let frame = renderer.render(ctx(), &gpu_scene, &view, &settings).unwrap();
+        let (cpu, cpu_refined) = cpu_refined(&frame, &bvh, &view, &settings);
+        // Without a budget the same pixels as with all 16 sets.
+        assert_eq!(frame.refined, all.refined, "{sets} sets: refined pixels");
+        assert_eq!(
+            frame.refined, cpu_refined,
+            "{sets} sets: refined pixels against the twin"
+        );
+        let rays = 16.0 * sets as f32;
+        let mut changed = 0;
+        for p in (0..frame.refined.len()).filter(|&p| frame.refined[p]) {
+            // A count of 16 · sets rays on both sides: exact.
+            assert_eq!(
+                frame.filtered[p][3], cpu[p][3],
+                "{sets} sets: pixel {p} visibility"
+            );
+            let v = frame.filtered[p][3] * rays;
+            assert_eq!(v, v.round(), "{sets} sets: pixel {p}: visibility {v}/{rays}");
+            changed += usize::from(frame.filtered[p][3] != all.filtered[p][3]);
+        }
+        assert!(
+            changed > 0,
+            "{sets} sets: every refined value equals the 256-ray one"
+        );
+    }
+    let err = renderer
+        .render(
+            ctx(),
+            &gpu_scene,
+            &view,
+            &FrameSettings {
+                refine_sets: 3,
+                ..refined_settings(16, 16)
+            },
+        )
+        .unwrap_err();
+    assert!(err.to_string().contains("1, 2, 4, 8 or 16"), "{err}");
+}
+
+#[test]
+fn budgeted_refinement_keeps_the_highest_scores_within_the_budget() {
+    let (w, h) = (64, 48);
+    let budget = 40.0;
+    let renderer = Renderer::new(ctx(), None).unwrap();
+    for s in &assets::EMBEDDED_SCENES[..2] {
+        let (scene, view) = embedded(s.name);
+        let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
+        let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
+        let plain = unrefined(&renderer, &gpu_scene, &view, w, h);
+        let gbuffer = plain.gbuffer.as_ref().unwrap();
+        let params = FilterParams::new(w, h);
+        let depth: Vec<f32> = gbuffer.iter().map(|t| t.depth).collect();
+        let normal: Vec<[f32; 3]> = gbuffer.iter().map(|t| t.normal.to_array()).collect();
+        let geometry = depth.iter().filter(|&&d| d > 0.0).count() as u32;
+        let score = |p: u32| {
+            refine_score(
+                &params,
+                &plain.unfiltered,
+                &plain.filtered,
+                &depth,
+                &normal,
+                p % w,
+                p / w,
+            )
+        };
+        for sets in [16, 8] {
+            let unbudgeted = FrameSettings {
+                refine_sets: sets,
+                ..refined_settings(w, h)
+            };
+            let settings = FrameSettings {
+                ray_budget: Some(budget),
+                ..unbudgeted
+            };
+            let frame = renderer.render(ctx(), &gpu_scene, &view, &settings).unwrap();
+            let full = renderer.render(ctx(), &gpu_scene, &view, &unbudgeted).unwrap();
+            let listed = refined_pixels(
+                &params,
+                &plain.unfiltered,
+                &plain.filtered,
+                &depth,
+                &normal,
+                None,
+                sets,
+            );
+            let keep = budget_pixels(budget, geometry, sets) as usize;
+            let what = format!("{}, {sets} sets", s.name);
+            // The budget must bind for the test to test it.
+            assert!(
+                keep > 0 && keep < listed.len(),
+                "{what}: keep {keep} of {}",
+                listed.len()
+            );
+            let gpu: Vec<u32> = (0..w * h).filter(|&p| frame.refined[p as usize]).collect();
+            assert_eq!(gpu.len(), keep, "{what}: refined pixels against the budget");
+            assert!(16.0 + (16 * sets) as f32 * keep as f32 / geometry as f32 <= budget);
+            assert!(
+                gpu.iter().all(|p| full.refined[*p as usize]),
+                "{what}: a pixel outside the rule's list"
+            );
+            // The twin's choice, except that pixels scored within rounding of the last kept
+            // score may swap: the filtered visibility matches the twin's within 1e-6 (the
+            // filter's test), and the GPU's square root and division may be a few ulp off
+            // (< 1e-6 for scores ≤ 1), so a score may differ by 2e-6.
+            let cpu = refined_pixels(
+                &params,
+                &plain.unfiltered,
+                &plain.filtered,
+                &depth,
+                &normal,
+                Some(budget),
+                sets,
+            );
+            let cut = cpu.iter().map(|&p| score(p)).fold(f32::INFINITY, f32::min);
+            for p in gpu
+                .iter()
+                .filter(|p| !cpu.contains(p))
+                .chain(cpu.iter().filter(|p| !gpu.contains(p)))
+            {
+                assert!(
+                    (score(*p) - cut).abs() <= 2e-6,
+                    "{what}: pixel {p} (score {}) chosen differently, last kept score {cut}",
+                    score(*p)
+                );
+            }
+            // The others keep the filter's value; the i-th refined pixel (pixel order) gets
+            // the twin's value over block i mod (16 / sets) of the sets, a count of rays:
+            // exact (irradiance as in `refinement_matches_cpu_twin`).
+            let per_tile = 16 / sets as usize;
+            let (points, shadow, shade) = (
+                sampling::light_points(&view.light),
+                shadow_params(&view.light, w, h),
+                shade_params(&view.light, w, h),
+            );
+            for p in (0..(w * h) as usize).filter(|&p| !frame.refined[p]) {
+                assert_eq!(frame.filtered[p], plain.filtered[p], "{what}: pixel {p}");
+            }
+            for (i, &p) in gpu.iter().enumerate() {
+                let first = (i % per_tile) * sets as usize;
+                let (x, y) = (p % w, p / w);
+                let p = p as usize;
+                let mask = plain.masks[p];
+                let v = refined_value(
+                    &bvh,
+                    &gbuffer[p],
+                    mask,
+                    x,
+                    y,
+                    &points,
+                    &shadow,
+                    &shade,
+                    first..first + sets as usize,
+                );
+                assert_eq!(frame.filtered[p][3], v.w, "{what}: pixel {p} visibility");
+                for k in 0..3 {
+                    let err = (frame.filtered[p][k] - v[k]).abs() / v[k].abs().max(1.0);
+                    assert!(
+                        err <= 1e-6,
+                        "{what}: pixel {p}: GPU {:?} vs CPU {v}",
+                        frame.filtered[p]
+                    );
+                }
+            }
+            eprintln!(
+                "{what}: budget {budget}: {keep} of {} listed pixels refined ({} chosen as the twin)",
+                listed.len(),
+                gpu.iter().filter(|p| cpu.contains(p)).count()
+            );
+        }
+    }
 }
 
 #[test]
@@ -216,6 +410,20 @@ fn refinement_needs_the_filter_and_an_interleaved_tracer() {
         .render(ctx(), &gpu_scene, &view, &refined_settings(16, 16))
         .unwrap_err();
     assert!(err.to_string().contains("interleaved tracer"), "{err}");
+    // A ray budget needs the refinement, and at least the frame's own 16 rays.
+    for (refine, budget, message) in [
+        (false, 24.0, "set FrameSettings::refine"),
+        (true, 15.0, "≥ 16"),
+        (true, f32::NAN, "≥ 16"),
+    ] {
+        let settings = FrameSettings {
+            refine,
+            ray_budget: Some(budget),
+            ..refined_settings(16, 16)
+        };
+        let err = renderer.render(ctx(), &gpu_scene, &view, &settings).unwrap_err();
+        assert!(err.to_string().contains(message), "{budget}: {err}");
+    }
 
     // Nothing to refine (the camera sees only sky): no pixel refined, no error.
     let mut sky = view;
