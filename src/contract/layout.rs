@@ -304,9 +304,9 @@ pub struct RefineParams {
 }
 
 impl RefineParams {
-    /// Listed pixels per tile: `16 / sets`.
+    /// Listed pixels per tile: [`crate::contract::refine::pixels_per_tile`] of `sets`.
     pub fn pixels_per_tile(&self) -> u32 {
-        16 / self.sets.clamp(1, 16)
+        crate::contract::refine::pixels_per_tile(self.sets)
     }
 
     /// Width and height of the sample image in pixels.

@@ -25,6 +25,12 @@ pub fn selection_params(filter: &FilterParams) -> FilterParams {
 /// [`RefineParams::sets`]: crate::contract::layout::RefineParams::sets
 pub const REFINE_SET_COUNTS: [u32; 5] = [1, 2, 4, 8, 16];
 
+/// Listed pixels per 4×4 tile of the refinement's sample image when each traces `sets` of
+/// the 16 sample sets: `16 / sets` (WGSL: `per_tile` in `refine_gather` and `refine_resolve`).
+pub fn pixels_per_tile(sets: u32) -> u32 {
+    crate::sampling::SETS as u32 / sets.clamp(1, 16)
+}
+
 /// How many pixels a ray budget of `budget` rays per pixel with geometry on average (the
 /// frame's 16 included) lets the refinement trace, for `geometry` pixels with geometry and
 /// `sets` sample sets (16 rays each, its own traced again when among them) per refined

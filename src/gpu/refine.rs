@@ -23,7 +23,7 @@ use super::pixel_buffers::PixelBuffers;
 use super::{GpuContext, GpuScene, GpuTimer, ShadowImage, ShadowTracer, empty_storage_buffer, read_buffer};
 use crate::contract::groups::{LINE_GROUP, PIXEL_GROUP};
 use crate::contract::layout::{GBufferTexel, RefineParams, ShadowParams};
-use crate::contract::refine::{budget_pixels, within_budget};
+use crate::contract::refine::{budget_pixels, pixels_per_tile, within_budget};
 use crate::sampling::SETS;
 use crate::{Error, Result};
 
@@ -134,11 +134,7 @@ impl Refinement {
 
         // Chunks whose sample image (16 texels per tile) fits one storage binding, whole
         // rows of whole tiles (so every chunk's first slot starts a tile).
-        let per_tile = RefineParams {
-            sets,
-            ..RefineParams::default()
-        }
-        .pixels_per_tile();
+        let per_tile = pixels_per_tile(sets);
         let tiles = listed.div_ceil(per_tile);
         let texel = size_of::<GBufferTexel>() as u64;
         let tiles_x = SAMPLE_TILES_X.min(tiles);

@@ -39,10 +39,10 @@ use crate::contract::layout::{GBufferTexel, RefineParams, ShadeParams, ShadowPar
 use crate::reference::filter::paired_taps;
 use crate::reference::shade::unshadowed_irradiance;
 use crate::reference::shadow_per_ray::per_ray_mask;
-use crate::sampling::{SAMPLES_PER_SET, SETS, pixel_set};
+use crate::sampling::{SAMPLES_PER_SET, pixel_set};
 
 pub use crate::contract::refine::{
-    REFINE_VISIBILITY_TOLERANCE, budget_pixels, selection_params, within_budget,
+    REFINE_VISIBILITY_TOLERANCE, budget_pixels, pixels_per_tile, selection_params, within_budget,
 };
 
 /// Whether pixel `(x, y)` is refined (the filter's inputs as for
@@ -209,7 +209,7 @@ pub fn refine_image(
     let depth: Vec<f32> = gbuffer.iter().map(|t| t.depth).collect();
     let normal: Vec<[f32; 3]> = gbuffer.iter().map(|t| t.normal.to_array()).collect();
     let mut refined = vec![false; gbuffer.len()];
-    let per_tile = (SETS as u32 / sets) as usize;
+    let per_tile = pixels_per_tile(sets) as usize;
     let pixels = refined_pixels(filter, values, filtered, &depth, &normal, budget, sets);
     for (i, p) in pixels.into_iter().enumerate() {
         let (x, y) = (p % filter.width, p / filter.width);
