@@ -20,15 +20,16 @@ const FULL_WINDOW: u32 = 0x1ffffffu;
 
 // Whether the tap at index `ix` (inside the image) may be averaged with a centre of depth
 // `d_c`, normal `n_c` and unfiltered visibility `v_c`: a hit at a similar depth, normal and
-// visibility (the tolerances of `filter_params`).
+// visibility (the tolerances of `filter_params`). Every test is evaluated (`&`, not `&&`): no
+// branch per tap (see filter.wgsl).
 fn similar_tap(ix: u32, d_c: f32, n_c: vec3<f32>, v_c: f32) -> bool {
     let d_n = depth[ix];
     let n_n = normal[ix].xyz;
     // Written out rather than dot() to fix the order of the products' sum.
     let cos_nc = n_n.x * n_c.x + n_n.y * n_c.y + n_n.z * n_c.z;
-    return d_n > 0.0 && abs(d_n - d_c) <= filter_params.depth_tolerance * d_c
-        && cos_nc >= filter_params.normal_tolerance
-        && abs(values[ix].w - v_c) <= filter_params.visibility_tolerance;
+    return (d_n > 0.0) & (abs(d_n - d_c) <= filter_params.depth_tolerance * d_c)
+        & (cos_nc >= filter_params.normal_tolerance)
+        & (abs(values[ix].w - v_c) <= filter_params.visibility_tolerance);
 }
 
 // The taps of the window around (x, y) the filter uses: those at a similar depth, normal and
@@ -38,24 +39,20 @@ fn paired_taps(x: u32, y: u32) -> u32 {
     let c_ix = y * filter_params.width + x;
     let d_c = depth[c_ix];
     let n_c = normal[c_ix].xyz;
-    // Same order as the CPU twin (dy outer, dx inner, increasing).
-    var accepted = 0u;
+    let v_c = values[c_ix].w;
+    // Same order as the CPU twin (dy outer, dx inner, increasing), and no branch per tap (see
+    // filter.wgsl): a tap beyond the border is read clamped onto the image and not counted.
+    let last_x = i32(filter_params.width) - 1;
+    let last_y = i32(filter_params.height) - 1;
+    var accepted = 1u << 12u; // the centre always counts, whatever the tolerances
     for (var dy = -2; dy <= 2; dy++) {
         let ny = i32(y) + dy;
-        if ny < 0 || ny >= i32(filter_params.height) {
-            continue;
-        }
+        let row = u32(clamp(ny, 0, last_y)) * filter_params.width;
         for (var dx = -2; dx <= 2; dx++) {
             let nx = i32(x) + dx;
-            if nx < 0 || nx >= i32(filter_params.width) {
-                continue;
-            }
-            let ix = u32(ny) * filter_params.width + u32(nx);
-            let similar = similar_tap(ix, d_c, n_c, values[c_ix].w);
-            // The centre always counts, whatever the tolerances, so weight_sum >= 1.
-            if (dx == 0 && dy == 0) || similar {
-                accepted |= 1u << u32((dy + 2) * 5 + dx + 2);
-            }
+            let inside = (ny >= 0) & (ny <= last_y) & (nx >= 0) & (nx <= last_x);
+            let similar = similar_tap(row + u32(clamp(nx, 0, last_x)), d_c, n_c, v_c);
+            accepted |= select(0u, 1u << u32((dy + 2) * 5 + dx + 2), inside & similar);
         }
     }
     // Only taps whose mirror image through the centre is accepted too: the
