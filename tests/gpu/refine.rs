@@ -437,3 +437,60 @@ fn refinement_needs_the_filter_and_an_interleaved_tracer() {
     );
     assert!(frame.refined.iter().all(|&r| !r));
 }
+
+/// Sky is no change of visibility: a pixel in umbra whose window holds sky (depth 0,
+/// visibility 1) and otherwise only umbra is not refined (`visibility_varies` counts
+/// neighbours with geometry only). The light is moved under the playground's ground,
+/// facing down, so every surface above it is behind it (umbra), and the camera looks
+/// at the horizon, so umbra meets sky.
+#[test]
+fn umbra_beside_the_sky_is_not_refined() {
+    let (w, h) = (64, 48);
+    let (scene, mut view) = embedded(assets::EMBEDDED_SCENES[0].name);
+    view.light.corner.y = -2.0;
+    assert!(
+        view.light.edge_u.cross(view.light.edge_v).y < 0.0,
+        "the playground's light faces down"
+    );
+    view.camera.eye = glam::Vec3::new(6.0, 1.0, 7.0);
+    view.camera.target = glam::Vec3::new(0.0, 1.0, 0.0);
+    let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
+    let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
+    let renderer = Renderer::new(ctx(), RendererOptions::default()).unwrap();
+    let frame = renderer
+        .render(ctx(), &gpu_scene, &view, &refined_settings(w, h))
+        .unwrap();
+    let sky = |p: usize| frame.masks[p] & MASK_SKY != 0;
+    let geometry = (0..frame.masks.len()).filter(|&p| !sky(p)).count();
+    assert!(
+        geometry > 0 && geometry < frame.masks.len(),
+        "the view shows ground and sky"
+    );
+    assert!(
+        (0..frame.masks.len()).all(|p| sky(p) || frame.unfiltered[p][3] == 0.0),
+        "every surface is in umbra"
+    );
+    // Umbra pixels with sky in their 5×5 window.
+    let beside_sky = (0..frame.masks.len())
+        .filter(|&p| !sky(p))
+        .filter(|&p| {
+            let (x, y) = ((p % w as usize) as i64, (p / w as usize) as i64);
+            (-2..=2).any(|dy| {
+                (-2..=2).any(|dx| {
+                    let (nx, ny) = (x + dx, y + dy);
+                    nx >= 0 && ny >= 0 && nx < w as i64 && ny < h as i64 && sky((ny * w as i64 + nx) as usize)
+                })
+            })
+        })
+        .count();
+    assert!(beside_sky > 0, "no umbra pixel has sky in its window");
+    let (_, cpu_refined) = cpu_refined(&frame, &bvh, &view, &refined_settings(w, h));
+    assert!(cpu_refined.iter().all(|&r| !r), "the twin refines a pixel");
+    let refined: Vec<usize> = (0..frame.refined.len()).filter(|&p| frame.refined[p]).collect();
+    assert!(
+        refined.is_empty(),
+        "{} of {beside_sky} umbra pixels beside the sky refined, e.g. {:?}",
+        refined.len(),
+        &refined[..refined.len().min(5)]
+    );
+}
