@@ -36,7 +36,7 @@ fn visibility_varies(x: u32, y: u32) -> bool {
     }
     // A row of 5 taps without a branch, then an exit if it found a change: lavapipe runs a
     // branch per tap (a skipped border tap, an exit) as divergent control flow, which made
-    // this kernel about twice as slow on Mesa 22.3. A tap beyond the border is read clamped
+    // this kernel up to twice as slow on Mesa 22.3. A tap beyond the border is read clamped
     // onto it, a pixel inside the window too, so the answer is the same.
     let last_x = i32(filter_params.width) - 1;
     let last_y = i32(filter_params.height) - 1;
