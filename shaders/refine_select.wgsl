@@ -34,17 +34,13 @@ fn visibility_varies(x: u32, y: u32) -> bool {
     if v_c > 0.0 && v_c < 1.0 {
         return true;
     }
-    // A row of 5 taps without a branch, then an exit if it found a change: lavapipe runs a
-    // branch per tap (a skipped border tap, an exit) as divergent control flow, which made
-    // this kernel up to twice as slow on Mesa 22.3. A tap beyond the border is read clamped
-    // onto it, a pixel inside the window too, so the answer is the same.
-    let last_x = i32(filter_params.width) - 1;
-    let last_y = i32(filter_params.height) - 1;
-    var varies = false;
+    // A row of 5 taps without a branch (clamped_pixel: a tap beyond the border reads the
+    // border, a pixel inside the window too, so the answer is the same), then an exit if it
+    // found a change; a branch per tap made this kernel up to twice as slow on Mesa 22.3.
     for (var dy = -2; dy <= 2; dy++) {
-        let row = u32(clamp(i32(y) + dy, 0, last_y)) * filter_params.width;
+        var varies = false;
         for (var dx = -2; dx <= 2; dx++) {
-            let ix = row + u32(clamp(i32(x) + dx, 0, last_x));
+            let ix = clamped_pixel(i32(x) + dx, i32(y) + dy);
             varies = varies | ((depth[ix] > 0.0) & (values[ix].w != v_c));
         }
         if varies {

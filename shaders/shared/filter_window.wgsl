@@ -18,10 +18,24 @@ struct FilterParams {
 // Every tap of the window: bit (dy + 2) * 5 + (dx + 2) for dx, dy in -2..=2.
 const FULL_WINDOW: u32 = 0x1ffffffu;
 
+// Whether (x, y) lies inside the image.
+fn inside_image(x: i32, y: i32) -> bool {
+    return (x >= 0) & (y >= 0) & (x < i32(filter_params.width)) & (y < i32(filter_params.height));
+}
+
+// The index of pixel (x, y) clamped onto the image: the window loops read every tap, one
+// beyond the border at the border, and leave out what they must without a branch per tap
+// (lavapipe runs such a branch as divergent control flow).
+fn clamped_pixel(x: i32, y: i32) -> u32 {
+    let cx = clamp(x, 0, i32(filter_params.width) - 1);
+    let cy = clamp(y, 0, i32(filter_params.height) - 1);
+    return u32(cy) * filter_params.width + u32(cx);
+}
+
 // Whether the tap at index `ix` (inside the image) may be averaged with a centre of depth
 // `d_c`, normal `n_c` and unfiltered visibility `v_c`: a hit at a similar depth, normal and
 // visibility (the tolerances of `filter_params`). Every test is evaluated (`&`, not `&&`): no
-// branch per tap (see filter.wgsl).
+// branch per tap.
 fn similar_tap(ix: u32, d_c: f32, n_c: vec3<f32>, v_c: f32) -> bool {
     let d_n = depth[ix];
     let n_n = normal[ix].xyz;
@@ -40,19 +54,15 @@ fn paired_taps(x: u32, y: u32) -> u32 {
     let d_c = depth[c_ix];
     let n_c = normal[c_ix].xyz;
     let v_c = values[c_ix].w;
-    // Same order as the CPU twin (dy outer, dx inner, increasing), and no branch per tap (see
-    // filter.wgsl): a tap beyond the border is read clamped onto the image and not counted.
-    let last_x = i32(filter_params.width) - 1;
-    let last_y = i32(filter_params.height) - 1;
+    // Same order as the CPU twin (dy outer, dx inner, increasing); a tap beyond the border is
+    // read clamped and not counted.
     var accepted = 1u << 12u; // the centre always counts, whatever the tolerances
     for (var dy = -2; dy <= 2; dy++) {
-        let ny = i32(y) + dy;
-        let row = u32(clamp(ny, 0, last_y)) * filter_params.width;
         for (var dx = -2; dx <= 2; dx++) {
             let nx = i32(x) + dx;
-            let inside = (ny >= 0) & (ny <= last_y) & (nx >= 0) & (nx <= last_x);
-            let similar = similar_tap(row + u32(clamp(nx, 0, last_x)), d_c, n_c, v_c);
-            accepted |= select(0u, 1u << u32((dy + 2) * 5 + dx + 2), inside & similar);
+            let ny = i32(y) + dy;
+            let similar = similar_tap(clamped_pixel(nx, ny), d_c, n_c, v_c);
+            accepted |= select(0u, 1u << u32((dy + 2) * 5 + dx + 2), inside_image(nx, ny) & similar);
         }
     }
     // Only taps whose mirror image through the centre is accepted too: the
