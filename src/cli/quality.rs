@@ -55,7 +55,8 @@ pub struct QualityArgs {
     /// Give up on the exact visibility (an error) after this many seconds.
     #[arg(long, default_value_t = 1800.0)]
     time_budget: f64,
-    /// Write each method's visibility image as DIR/METHOD.exr, and the exact one.
+    /// Write each method's visibility image, and the exact one, as DIR/METHOD.exr (32-bit
+    /// float) and DIR/METHOD.png (16-bit grey, linear: to look at side by side).
     #[arg(long, value_name = "DIR")]
     images: Option<PathBuf>,
     /// Write every figure as JSON.
@@ -284,15 +285,16 @@ pub fn run(args: &QualityArgs) -> Result<()> {
             .map(|(n, v, _, _)| (n.as_str(), v))
             .chain([("exact", &exact)]);
         for (name, values) in images {
-            let path = dir.join(format!("{name}.exr"));
             let image = FloatImage {
                 width: w,
                 height: h,
                 pixels: values.clone(),
             };
-            write_float_image(&path, &image)?;
+            for extension in ["exr", "png"] {
+                write_float_image(&dir.join(format!("{name}.{extension}")), &image)?;
+            }
         }
-        println!("wrote     {}/{{method}}.exr", dir.display());
+        println!("wrote     {}/{{method}}.exr and .png", dir.display());
     }
     if let Some(path) = &args.json {
         let report = QualityReport {

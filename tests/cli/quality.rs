@@ -32,7 +32,10 @@ fn penumbra(dir: &Path, args: &[&str]) -> (bool, String, String) {
 fn quality_reports_every_method_on_the_generated_scenes() {
     for scene in ["playground", "lattice"] {
         let dir = out_dir(scene);
-        let (ok, stdout, stderr) = penumbra(&dir, &["quality", scene, "--size", "48x40", "--json", "q.json"]);
+        let args = [
+            "quality", scene, "--size", "48x40", "--json", "q.json", "--images", "images",
+        ];
+        let (ok, stdout, stderr) = penumbra(&dir, &args);
         assert!(ok, "quality {scene} failed:\n{stdout}\n{stderr}");
         let report: serde_json::Value =
             serde_json::from_slice(&std::fs::read(dir.join("q.json")).unwrap()).unwrap();
@@ -97,6 +100,23 @@ fn quality_reports_every_method_on_the_generated_scenes() {
             );
         }
         assert!(stdout.contains("error by region"), "{stdout}");
+        // Every method's image and the exact one, as EXR and as a 16-bit PNG holding the
+        // same values to the PNG's step (rounded: at most half of 1/65535 away).
+        for name in names.iter().copied().chain(["exact"]) {
+            let exr = read_float_image(&dir.join("images").join(format!("{name}.exr"))).unwrap();
+            let png = read_float_image(&dir.join("images").join(format!("{name}.png"))).unwrap();
+            assert_eq!((exr.width, exr.height, png.width, png.height), (48, 40, 48, 40));
+            let worst = exr
+                .pixels
+                .iter()
+                .zip(&png.pixels)
+                .map(|(e, p)| (e.clamp(0.0, 1.0) - p).abs())
+                .fold(0.0f32, f32::max);
+            assert!(
+                worst <= 0.5 / 65535.0 + 1e-7,
+                "{scene} {name}: PNG {worst} from the EXR"
+            );
+        }
     }
 }
 
