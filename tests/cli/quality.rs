@@ -283,6 +283,14 @@ fn bench_with_a_two_light_view_benches_each_light() {
         .map(|c| c["tracers"][0]["shadow_ms_median"].as_f64().unwrap())
         .sum();
     assert_eq!(total["tracers"][0]["tracer"], "mft");
-    assert_eq!(total["tracers"][0]["shadow_ms_median"].as_f64().unwrap(), ms);
+    // The bench adds the medians exactly as it writes them, but serde_json's default parser
+    // reads a float back up to one ulp off (measured: 1 at most over 2 M bench-like values;
+    // its exact `float_roundtrip` would also change how the CLI reads view files). Three
+    // parsed values and one rounded addition: at most 3.5 ulps of the total.
+    let total_ms = total["tracers"][0]["shadow_ms_median"].as_f64().unwrap();
+    assert!(
+        (total_ms - ms).abs() <= 4.0 * f64::EPSILON * total_ms,
+        "total {total_ms} against the sum {ms}"
+    );
     assert!(stdout.contains("two.json, all 2 lights"), "{stdout}");
 }
