@@ -171,34 +171,59 @@ fn frustum_culls_triangle(tri: BvhTriangle) -> bool {
     return edge_culls(m0, d) || edge_culls(m1, d) || edge_culls(m2, d);
 }
 
-// Ray k against triangle `ix`: exactly the per-ray kernel's test and update.
-fn test_ray(k: u32, tri: BvhTriangle, ix: u32) {
-    let h = intersect_triangle(tri, camera.eye, f_dirs[k], f_t[k]);
-    if h.x >= 0.0 && !passes_alpha(tri, ix, h) {
-        f_t[k] = h.x;
-        f_best[k] = h;
-        f_tri[k] = ix;
-    }
+// The ray-independent part of the per-ray kernel's Moller-Trumbore test
+// (shared/intersect) for rays from the eye: the same values in the same order.
+struct EyeTriangle {
+    e1: vec3<f32>,
+    e2: vec3<f32>,
+    s: vec3<f32>,
+    q: vec3<f32>,
+}
+
+// Ray k against triangle `ix`: exactly the per-ray kernel's test and update,
+// branch-free (selects instead of its early returns: the same result, and 16
+// unrolled copies without a branch each).
+fn test_ray(k: u32, et: EyeTriangle, tri: BvhTriangle, ix: u32) {
+    let dir = f_dirs[k];
+    let p = cross(dir, et.e2);
+    let det = dot(et.e1, p);
+    let inv_det = 1.0 / det;
+    let u = dot(et.s, p) * inv_det;
+    let v = dot(dir, et.q) * inv_det;
+    let t = dot(et.e2, et.q) * inv_det;
+    // The negations of shared/intersect's early-return conditions (a NaN fails every compare).
+    let hit = (det != 0.0) & !((u < 0.0) | (u > 1.0)) & !((v < 0.0) | (u + v > 1.0))
+        & (t > 0.0) & (t < f_t[k]);
+    let h = vec3<f32>(t, u, v);
+    let keep = hit && !passes_alpha(tri, ix, h);
+    f_t[k] = select(f_t[k], t, keep);
+    f_best[k] = select(f_best[k], h, keep);
+    f_tri[k] = select(f_tri[k], ix, keep);
 }
 
 // All 16 rays (unrolled: every loop iteration counts towards lavapipe's limit).
 fn test_rays(tri: BvhTriangle, ix: u32) {
-    test_ray(0u, tri, ix);
-    test_ray(1u, tri, ix);
-    test_ray(2u, tri, ix);
-    test_ray(3u, tri, ix);
-    test_ray(4u, tri, ix);
-    test_ray(5u, tri, ix);
-    test_ray(6u, tri, ix);
-    test_ray(7u, tri, ix);
-    test_ray(8u, tri, ix);
-    test_ray(9u, tri, ix);
-    test_ray(10u, tri, ix);
-    test_ray(11u, tri, ix);
-    test_ray(12u, tri, ix);
-    test_ray(13u, tri, ix);
-    test_ray(14u, tri, ix);
-    test_ray(15u, tri, ix);
+    var et: EyeTriangle;
+    et.e1 = tri.v1 - tri.v0;
+    et.e2 = tri.v2 - tri.v0;
+    et.s = camera.eye - tri.v0;
+    et.q = cross(et.s, et.e1);
+    test_ray(0u, et, tri, ix);
+    test_ray(1u, et, tri, ix);
+    test_ray(2u, et, tri, ix);
+    test_ray(3u, et, tri, ix);
+    test_ray(4u, et, tri, ix);
+    test_ray(5u, et, tri, ix);
+    test_ray(6u, et, tri, ix);
+    test_ray(7u, et, tri, ix);
+    test_ray(8u, et, tri, ix);
+    test_ray(9u, et, tri, ix);
+    test_ray(10u, et, tri, ix);
+    test_ray(11u, et, tri, ix);
+    test_ray(12u, et, tri, ix);
+    test_ray(13u, et, tri, ix);
+    test_ray(14u, et, tri, ix);
+    test_ray(15u, et, tri, ix);
     f_t_max = max(max(max(max(f_t[0], f_t[1]), max(f_t[2], f_t[3])), max(max(f_t[4], f_t[5]), max(f_t[6], f_t[7]))),
         max(max(max(f_t[8], f_t[9]), max(f_t[10], f_t[11])), max(max(f_t[12], f_t[13]), max(f_t[14], f_t[15]))));
 }
