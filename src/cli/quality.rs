@@ -155,7 +155,16 @@ pub fn run(args: &QualityArgs) -> Result<()> {
     let mut methods: Vec<(String, Vec<f32>, f64, f64)> = Vec::new();
     progress!("rendering MFT 16 spp…\r");
     let mft = renderer(Tracer::Mft)?;
-    mft.render(&ctx, &gpu_scene, &view, &FrameSettings::new(8, 8))?; // compile before timing
+    // Compile before timing (the refinement's kernels too, where the small frame lists a pixel).
+    mft.warm_up(
+        &ctx,
+        &gpu_scene,
+        &view,
+        &FrameSettings {
+            refine: true,
+            ..settings
+        },
+    )?;
     let frame = mft.render(&ctx, &gpu_scene, &view, &settings)?;
     let shadow_ms = frame.pass_ms("shadow");
     methods.push((
@@ -213,7 +222,7 @@ pub fn run(args: &QualityArgs) -> Result<()> {
     for rays in [64, 256] {
         progress!("rendering reference {rays} spp…   \r");
         let r = renderer(Tracer::Reference { rays })?;
-        r.render(&ctx, &gpu_scene, &view, &FrameSettings::new(8, 8))?;
+        r.warm_up(&ctx, &gpu_scene, &view, &settings)?;
         let f = r.render(&ctx, &gpu_scene, &view, &settings)?;
         methods.push((
             format!("reference-{rays}"),

@@ -269,6 +269,27 @@ pub(super) fn check_refine_args(budget: Option<f32>, sets: u32) -> Result<()> {
     Ok(())
 }
 
+/// The device and the renderer `args` ask for (the shadow tracer `tracer`).
+fn new_renderer(args: &RenderArgs, tracer: Tracer) -> Result<(GpuContext, Renderer)> {
+    let ctx = GpuContext::new(&GpuOptions {
+        adapter: args.adapter.clone(),
+        ray_query: tracer == Tracer::RayQuery,
+    })?;
+    let renderer = Renderer::new(
+        &ctx,
+        RendererOptions {
+            variant: args.vector.forced(),
+            leaf_mode: args.leaf_mode.into(),
+            tracer,
+            counters: false,
+            shrink: !args.no_shrink,
+            primary: args.primary.into(),
+            ..RendererOptions::default()
+        },
+    )?;
+    Ok((ctx, renderer))
+}
+
 /// Renders and writes the image(s), printing what ran and how long it took.
 pub fn run(args: &RenderArgs) -> Result<()> {
     if args.refine
@@ -322,9 +343,24 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         });
     }
     let (width, height) = args.size;
-    let (scene, file) = load_scene_and_views(args.scene.as_deref(), args.view.as_deref())?;
+    // The scene loads and its BVH builds on a second thread while the device and the
+    // pipelines are made (each a tenth of a second or more on lavapipe). A scene error
+    // comes first, as it would alone.
+    let (loaded, gpu) = std::thread::scope(|s| {
+        let loading = s.spawn(|| -> Result<_> {
+            let (scene, file) = load_scene_and_views(args.scene.as_deref(), args.view.as_deref())?;
+            let bvh = Bvh::build(&scene, &args.bvh.settings())?;
+            Ok((scene, file, bvh))
+        });
+        let gpu = new_renderer(args, tracer);
+        let loaded = loading
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        (loaded, gpu)
+    });
+    let (scene, file, bvh) = loaded?;
+    let (ctx, renderer) = gpu?;
     let views = file.views();
-    let bvh = Bvh::build(&scene, &args.bvh.settings())?;
     let view_name = args
         .view
         .as_ref()
@@ -345,24 +381,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         bvh.build_time.as_secs_f64() * 1e3
     );
 
-    let ctx = GpuContext::new(&GpuOptions {
-        adapter: args.adapter.clone(),
-        ray_query: tracer == Tracer::RayQuery,
-    })?;
     println!("adapter   {}", ctx.info);
-    let forced = args.vector.forced();
-    let renderer = Renderer::new(
-        &ctx,
-        RendererOptions {
-            variant: forced,
-            leaf_mode: args.leaf_mode.into(),
-            tracer,
-            counters: false,
-            shrink: !args.no_shrink,
-            primary: args.primary.into(),
-            ..RendererOptions::default()
-        },
-    )?;
     if embree {
         println!("tracer    embree (CPU: rtcOccluded16, one 16-ray packet per pixel, all cores)");
     } else if tracer.uses_vector() {
@@ -384,10 +403,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     } else {
         settings.filter = Some((args.depth_tolerance, args.normal_tolerance));
     }
-    // Lavapipe compiles a pipeline at its first dispatch: a tiny frame first
-    // keeps compilation out of the timings below.
     progress!("compiling kernels…\r");
-    renderer.render(&ctx, &gpu_scene, &views[0], &FrameSettings::new(8, 8))?;
+    renderer.warm_up(&ctx, &gpu_scene, &views[0], &settings)?;
     let unit = tracer.unit();
     let rays_per_pixel = f64::from(tracer.rays_per_pixel());
     let start = Instant::now();

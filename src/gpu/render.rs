@@ -22,11 +22,25 @@ use crate::contract::shade::shade_params;
 use crate::contract::shadow::shadow_params;
 use crate::pass_inputs::{RAY_OFFSET_FRACTION, camera_params, tile_camera};
 use crate::sampling::SAMPLES_PER_SET;
-use crate::scene::view::View;
+use crate::scene::view::{MIN_FOV_Y_DEGREES, View};
 use crate::{Error, Result};
 
 /// Enough timestamp slots for every dispatch of a frame, resume rounds included.
 const TIMER_CAPACITY: u32 = 4096;
+
+/// The side of [`Renderer::warm_up`]'s square frame, in pixels.
+const WARM_UP_SIDE: u32 = 8;
+
+/// `view` with its field of view narrowed around its centre so that a pixel of a
+/// [`WARM_UP_SIDE`]-high frame covers the angle of a pixel of a `height`-high frame
+/// (never wider than `view`, never below [`MIN_FOV_Y_DEGREES`]).
+fn warm_up_view(view: &View, height: u32) -> View {
+    let scale = WARM_UP_SIDE as f32 / height.max(WARM_UP_SIDE) as f32;
+    let tan = (view.camera.fov_y_degrees.to_radians() * 0.5).tan() * scale;
+    let mut narrow = *view;
+    narrow.camera.fov_y_degrees = (2.0 * tan.atan().to_degrees()).max(MIN_FOV_Y_DEGREES);
+    narrow
+}
 
 /// The pipelines of the standalone frame.
 #[derive(Debug)]
@@ -47,42 +61,59 @@ impl Renderer {
     /// shadow pass's vector variant and leaf mode.
     pub fn new(ctx: &GpuContext, options: impl Into<RendererOptions>) -> Result<Renderer> {
         let options = options.into();
+        let primary_options = PrimaryOptions {
+            tracer: options.primary,
+            variant: options.variant,
+            counters: options.counters,
+            iteration_budget: match options.primary {
+                PrimaryTracer::Mft => options.primary_iteration_budget,
+                PrimaryTracer::PerRay => ITERATION_BUDGET,
+            },
+        };
+        let tracer_options = TracerOptions {
+            tracer: options.tracer,
+            variant: options.variant,
+            leaf_mode: options.leaf_mode,
+            counters: options.counters,
+            shrink: options.shrink,
+        };
+        // The shadow stages' pipelines are made on a second thread while this one makes the
+        // primary pass's: each takes tens of milliseconds of the driver's compiler (error
+        // scopes are per thread in wgpu, so each thread's errors stay its own).
+        let (stages, primary) = std::thread::scope(|s| {
+            let stages = s.spawn(|| ShadowStages::new(ctx, &tracer_options, VisibilityStage::Shade));
+            let primary = Self::primary_passes(ctx, &primary_options);
+            let stages = stages
+                .join()
+                .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+            (stages, primary)
+        });
+        let (primary, primary_fallback) = primary?;
         Ok(Renderer {
-            primary: PrimaryPass::new(
+            primary,
+            primary_fallback,
+            stages: stages?,
+        })
+    }
+
+    /// The primary pass of `options`, and the per-ray fallback a multi-frusta one needs.
+    fn primary_passes(
+        ctx: &GpuContext,
+        options: &PrimaryOptions,
+    ) -> Result<(PrimaryPass, Option<PrimaryPass>)> {
+        let primary = PrimaryPass::new(ctx, options)?;
+        let fallback = match options.tracer {
+            PrimaryTracer::Mft => Some(PrimaryPass::new(
                 ctx,
                 &PrimaryOptions {
-                    tracer: options.primary,
-                    variant: options.variant,
+                    tracer: PrimaryTracer::PerRay,
                     counters: options.counters,
-                    iteration_budget: match options.primary {
-                        PrimaryTracer::Mft => options.primary_iteration_budget,
-                        PrimaryTracer::PerRay => ITERATION_BUDGET,
-                    },
+                    ..PrimaryOptions::default()
                 },
-            )?,
-            primary_fallback: match options.primary {
-                PrimaryTracer::Mft => Some(PrimaryPass::new(
-                    ctx,
-                    &PrimaryOptions {
-                        tracer: PrimaryTracer::PerRay,
-                        counters: options.counters,
-                        ..PrimaryOptions::default()
-                    },
-                )?),
-                PrimaryTracer::PerRay => None,
-            },
-            stages: ShadowStages::new(
-                ctx,
-                &TracerOptions {
-                    tracer: options.tracer,
-                    variant: options.variant,
-                    leaf_mode: options.leaf_mode,
-                    counters: options.counters,
-                    shrink: options.shrink,
-                },
-                VisibilityStage::Shade,
-            )?,
-        })
+            )?),
+            PrimaryTracer::PerRay => None,
+        };
+        Ok((primary, fallback))
     }
 
     /// The shadow pass's vector variant.
@@ -114,6 +145,33 @@ impl Renderer {
         settings: &FrameSettings,
     ) -> Result<Frame> {
         self.render_with_progress(ctx, scene, view, settings, &mut |_, _, _| {})
+    }
+
+    /// Renders an 8×8 frame with `settings`' stages (filter, refinement) so that the
+    /// driver compiles the kernels a `settings` frame runs before frames that are timed:
+    /// lavapipe compiles a pipeline at its first dispatch, inside that dispatch's GPU time.
+    ///
+    /// The small frame looks at the centre of `view` through a field of view narrowed so
+    /// that its pixels are as large as those of a `settings.height`-pixel-high frame:
+    /// frusta as narrow as the real frame's. Over the whole view, 8×8 pixels make frusta
+    /// so wide that the primary vectors run out of loop iterations and the per-ray
+    /// fallback traces the frame again.
+    pub fn warm_up(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        view: &View,
+        settings: &FrameSettings,
+    ) -> Result<()> {
+        let small = FrameSettings {
+            width: WARM_UP_SIDE,
+            height: WARM_UP_SIDE,
+            keep_gbuffer: false,
+            max_tile: None,
+            ..*settings
+        };
+        self.render(ctx, scene, &warm_up_view(view, settings.height), &small)
+            .map(drop)
     }
 
     /// [`Renderer::render`], calling `progress(phase, done, total)` as the shadow pass
@@ -536,4 +594,34 @@ fn check_groups(ctx: &GpuContext, (x, y): (u32, u32)) -> Result<()> {
         )));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The warm-up frame's pixels subtend the angle of the real frame's (its frusta are as
+    /// narrow), and a frame no higher than it keeps the view's field of view.
+    #[test]
+    fn warm_up_pixels_are_as_large_as_the_frames() {
+        let view = crate::assets::EMBEDDED_SCENES[0].view();
+        for height in [512, 1024, 4096] {
+            let full = crate::pass_inputs::camera_params(&view.camera, height, height, 0.0);
+            let small = crate::pass_inputs::camera_params(
+                &warm_up_view(&view, height).camera,
+                WARM_UP_SIDE,
+                WARM_UP_SIDE,
+                0.0,
+            );
+            let full_pixel = full.up.length() / height as f32;
+            let small_pixel = small.up.length() / WARM_UP_SIDE as f32;
+            // tan, atan and degrees in f32: a few ulps each.
+            assert!(
+                (small_pixel / full_pixel - 1.0).abs() < 1e-5,
+                "height {height}: {small_pixel} vs {full_pixel}"
+            );
+        }
+        assert_eq!(warm_up_view(&view, WARM_UP_SIDE).camera, view.camera);
+        assert_eq!(warm_up_view(&view, 4).camera, view.camera);
+    }
 }
