@@ -32,7 +32,7 @@ pub fn write_image(path: &Path, image: &HdrImage, tone: &ToneMap) -> Result<()> 
         image.pixels.len(),
         |format, bytes| match format {
             ImageFormat::Png => {
-                let srgb: Vec<u8> = image.pixels.iter().flat_map(|&p| tone.apply_rgb(p)).collect();
+                let srgb = tone.apply_pixels(&image.pixels);
                 PngEncoder::new(bytes).write_image(&srgb, image.width, image.height, ExtendedColorType::Rgb8)
             }
             _ => encode_exr(bytes, &image.pixels, image.width, image.height),

@@ -129,6 +129,32 @@ fn png_round_trip_holds_the_tone_mapped_bytes() {
     assert_eq!(dir.entries(), ["out.png"]);
 }
 
+/// The threaded tone map gives every pixel's bytes in order, across chunk boundaries
+/// (more pixels than two chunks of 65536, and a partial last one).
+#[test]
+fn tone_mapping_all_pixels_equals_each_pixel_in_order() {
+    let tone = ToneMap { exposure: 1.3 };
+    let pixels: Vec<[f32; 3]> = (0..3 * 65_536 + 7)
+        .map(|i| {
+            let x = i as f32;
+            [
+                x * 1e-5,
+                (x * 0.37).sin().abs() * 4.0,
+                if i % 5 == 0 {
+                    f32::NAN
+                } else {
+                    1e-3 * (i % 1000) as f32
+                },
+            ]
+        })
+        .collect();
+    let bytes = tone.apply_pixels(&pixels);
+    assert_eq!(bytes.len(), 3 * pixels.len());
+    for (i, (b, &p)) in bytes.chunks_exact(3).zip(&pixels).enumerate() {
+        assert_eq!(b, tone.apply_rgb(p), "pixel {i}");
+    }
+}
+
 #[test]
 fn extension_is_case_insensitive() {
     let dir = TempDir::new("extension_case");

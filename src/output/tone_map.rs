@@ -38,6 +38,26 @@ impl ToneMap {
     pub fn apply_rgb(&self, rgb: [f32; 3]) -> [u8; 3] {
         rgb.map(|c| self.apply(c))
     }
+
+    /// [`ToneMap::apply_rgb`] of every pixel, as consecutive R, G, B bytes. Large images
+    /// are split over the CPU's threads: a megapixel is three million `exp` and `powf`,
+    /// tens of milliseconds on one core.
+    pub fn apply_pixels(&self, pixels: &[[f32; 3]]) -> Vec<u8> {
+        const MIN_CHUNK: usize = 1 << 16;
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let chunk = pixels.len().div_ceil(threads).max(MIN_CHUNK);
+        let mut bytes = vec![0u8; 3 * pixels.len()];
+        std::thread::scope(|s| {
+            for (out, input) in bytes.chunks_mut(3 * chunk).zip(pixels.chunks(chunk)) {
+                s.spawn(move || {
+                    for (o, &p) in out.chunks_exact_mut(3).zip(input) {
+                        o.copy_from_slice(&self.apply_rgb(p));
+                    }
+                });
+            }
+        });
+        bytes
+    }
 }
 
 /// The sRGB transfer function (linear → encoded), for `t` in 0..=1.
