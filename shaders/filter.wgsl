@@ -10,7 +10,8 @@
 @group(0) @binding(1) var<storage, read> values: array<vec4<f32>>;
 // Distance to the camera; 0 (or less) = no hit: never a neighbour, passed through unchanged.
 @group(0) @binding(2) var<storage, read> depth: array<f32>;
-// Unit shading normal in xyz; w unused (vec4 for a 16-byte stride).
+// Unit shading normal in xyz, the depth again in w: a tap's depth and normal in one load (on
+// Mesa 22.3 lavapipe every storage load is a loop over the lanes).
 @group(0) @binding(3) var<storage, read> normal: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read_write> filtered: array<vec4<f32>>;
 
@@ -52,10 +53,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         // dy <= 0 here, so a is never below the centre and b never above it.
         let inside = (ay >= 0) & (by < i32(filter_params.height)) & (min(ax, bx) >= 0)
             & (max(ax, bx) < i32(filter_params.width));
-        let used = inside & similar_tap(a, d_c, n_c, v_c.w) & similar_tap(b, d_c, n_c, v_c.w);
+        let v_a = values[a];
+        let v_b = values[b];
+        let used = inside & similar(normal[a], v_a.w, d_c, n_c, v_c.w) & similar(normal[b], v_b.w, d_c, n_c, v_c.w);
         let w = select(0.0, select(1.0, 0.5, abs(dy) == 2) * select(1.0, 0.5, abs(dx) == 2), used);
-        sum += values[a] * w;
-        sum += values[b] * w;
+        sum += v_a * w;
+        sum += v_b * w;
         weight_sum += 2.0 * w;
     }
     filtered[c_ix] = sum / weight_sum;

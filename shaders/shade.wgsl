@@ -12,7 +12,7 @@ override REFERENCE_RAYS: u32 = 0u;
 @group(0) @binding(0) var<uniform> params: ShadeParams;
 @group(0) @binding(1) var<storage, read> gbuffer: array<GBufferTexel>;
 @group(0) @binding(2) var<storage, read> masks: array<u32>;
-// Outputs for the filter: (radiance rgb, visibility), depth, normal.
+// Outputs for the filter: (radiance rgb, visibility), depth, normal (with the depth again in w).
 @group(0) @binding(3) var<storage, read_write> values: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read_write> depth: array<f32>;
 @group(0) @binding(5) var<storage, read_write> normal: array<vec4<f32>>;
@@ -28,7 +28,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let texel = gbuffer[p];
     let mask = masks[p];
     depth[p] = texel.depth;
-    normal[p] = vec4<f32>(texel.normal, 0.0);
+    normal[p] = vec4<f32>(texel.normal, texel.depth);
     brdf[p] = vec4<f32>(texel.albedo / PI, 0.0);
     if (mask & MASK_SKY) != 0u {
         values[p] = vec4<f32>(0.0, 0.0, 0.0, 1.0);

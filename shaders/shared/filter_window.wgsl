@@ -32,18 +32,23 @@ fn clamped_pixel(x: i32, y: i32) -> u32 {
     return u32(cy) * filter_params.width + u32(cx);
 }
 
-// Whether the tap at index `ix` (inside the image) may be averaged with a centre of depth
-// `d_c`, normal `n_c` and unfiltered visibility `v_c`: a hit at a similar depth, normal and
-// visibility (the tolerances of `filter_params`). Every test is evaluated (`&`, not `&&`): no
-// branch per tap.
-fn similar_tap(ix: u32, d_c: f32, n_c: vec3<f32>, v_c: f32) -> bool {
-    let d_n = depth[ix];
-    let n_n = normal[ix].xyz;
+// Whether a tap whose normal (xyz) and depth (w) are `tap` and whose unfiltered visibility is
+// `v_n` may be averaged with a centre of depth `d_c`, normal `n_c` and unfiltered visibility
+// `v_c`: a hit at a similar depth, normal and visibility (the tolerances of `filter_params`).
+// Every test is evaluated (`&`, not `&&`): no branch per tap.
+fn similar(tap: vec4<f32>, v_n: f32, d_c: f32, n_c: vec3<f32>, v_c: f32) -> bool {
+    let d_n = tap.w;
     // Written out rather than dot() to fix the order of the products' sum.
-    let cos_nc = n_n.x * n_c.x + n_n.y * n_c.y + n_n.z * n_c.z;
+    let cos_nc = tap.x * n_c.x + tap.y * n_c.y + tap.z * n_c.z;
     return (d_n > 0.0) & (abs(d_n - d_c) <= filter_params.depth_tolerance * d_c)
         & (cos_nc >= filter_params.normal_tolerance)
-        & (abs(values[ix].w - v_c) <= filter_params.visibility_tolerance);
+        & (abs(v_n - v_c) <= filter_params.visibility_tolerance);
+}
+
+// [`similar`] for the tap at index `ix` (inside the image): one load of its normal and depth
+// (`normal[ix]`; the depth rides in w), one of its visibility.
+fn similar_tap(ix: u32, d_c: f32, n_c: vec3<f32>, v_c: f32) -> bool {
+    return similar(normal[ix], values[ix].w, d_c, n_c, v_c);
 }
 
 // The taps of the window around (x, y) the filter uses: those at a similar depth, normal and

@@ -10,7 +10,7 @@ use bytemuck::{Pod, Zeroable};
 ///
 /// Bindings, group 0: 0 `filter_params: FilterParams` (uniform), 1 `values:
 /// array<vec4<f32>>`, 2 `depth: array<f32>`, 3 `normal: array<vec4<f32>>`
-/// (16-byte stride, xyz used; see [`normals_for_gpu`]), all read-only storage,
+/// (the normal in xyz and the depth again in w; see [`normals_for_gpu`]), all read-only storage,
 /// and 4 `filtered: array<vec4<f32>>` (read-write storage, the output).
 pub const FILTER_KERNEL: &str = "filter";
 

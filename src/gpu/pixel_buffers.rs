@@ -62,7 +62,7 @@ pub struct PixelBuffers {
     pub values: wgpu::Buffer,
     /// `array<f32>`: eye distance per pixel (0: no hit), for the filter.
     pub depth: wgpu::Buffer,
-    /// `array<vec4<f32>>`: shading normal per pixel, for the filter.
+    /// `array<vec4<f32>>`: shading normal (xyz) and eye distance again (w) per pixel, for the filter.
     pub normal: wgpu::Buffer,
     /// `array<vec4<f32>>`: `values` after the filter (and the refinement).
     pub filtered: wgpu::Buffer,

@@ -82,7 +82,7 @@ pub fn discontinuity_filter(
 /// tolerances, so the mean is never of nothing.
 ///
 /// The GPU kernel computes exactly this, in the same order (the normal buffer
-/// there has a 16-byte stride: [`normals_for_gpu`]).
+/// there holds the depth too: [`normals_for_gpu`]).
 ///
 /// # Panics
 ///
@@ -213,9 +213,14 @@ pub fn same_surface(params: &FilterParams, d_c: f32, n_c: [f32; 3], d_n: f32, n_
 }
 
 /// The normals as the kernel's `normal` buffer wants them: `vec4<f32>` per
-/// pixel (16-byte stride, WGSL's alignment for `array<vec3<f32>>` too), w = 0.
-pub fn normals_for_gpu(normal: &[[f32; 3]]) -> Vec<[f32; 4]> {
-    normal.iter().map(|&[x, y, z]| [x, y, z, 0.0]).collect()
+/// pixel (16-byte stride, WGSL's alignment for `array<vec3<f32>>` too) with the
+/// pixel's depth in w, so that the kernel reads a tap's depth and normal in one load.
+pub fn normals_for_gpu(normal: &[[f32; 3]], depth: &[f32]) -> Vec<[f32; 4]> {
+    normal
+        .iter()
+        .zip(depth)
+        .map(|(&[x, y, z], &d)| [x, y, z, d])
+        .collect()
 }
 
 #[cfg(test)]
@@ -620,9 +625,9 @@ mod tests {
     }
 
     #[test]
-    fn normals_for_gpu_have_a_16_byte_stride() {
-        let packed = normals_for_gpu(&[[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
-        assert_eq!(packed, [[1.0, 2.0, 3.0, 0.0], [4.0, 5.0, 6.0, 0.0]]);
+    fn normals_for_gpu_have_a_16_byte_stride_and_the_depth_in_w() {
+        let packed = normals_for_gpu(&[[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]], &[7.0, 8.0]);
+        assert_eq!(packed, [[1.0, 2.0, 3.0, 7.0], [4.0, 5.0, 6.0, 8.0]]);
         assert_eq!(bytemuck::cast_slice::<_, u8>(&packed).len(), 32);
     }
 
