@@ -57,10 +57,29 @@ fn group_may(b: bool) -> bool {
 // Whether BVH reads go through vec16_words (shared/bvh_vec16): here, yes.
 const VEC16_LANE_WORDS: bool = true;
 
-// The 16 lanes' `word`s, in lane order, in every lane of the vector. With one
-// vector per subgroup the lane indices are constants (subgroupBroadcast), which
-// lavapipe turns into plain vector shuffles.
+// How vec16_words hands the lanes each other's words when a subgroup holds one vector:
+// false, one broadcast per lane (subgroupBroadcast with a constant lane: one instruction
+// on a GPU); true, one reduction per lane (subgroupMax of the word in its own lane and 0
+// in the others). naga writes a broadcast as a SPIR-V shuffle, which lavapipe runs at 16
+// lanes as a loop over the lanes; its reductions are unrolled vector code from Mesa 24.3
+// on and loops before. Same bits either way; the host picks by driver
+// (VectorVariant::SubgroupReduce).
+override VEC16_WORDS_BY_REDUCTION: bool = false;
+
+// The 16 lanes' `word`s, in lane order, in every lane of the vector.
 fn vec16_words(word: u32) -> array<u32, 16> {
+    if VEC16_PER_WG == 1u && VEC16_WORDS_BY_REDUCTION {
+        return array<u32, 16>(
+            subgroupMax(select(0u, word, g_lane == 0u)), subgroupMax(select(0u, word, g_lane == 1u)),
+            subgroupMax(select(0u, word, g_lane == 2u)), subgroupMax(select(0u, word, g_lane == 3u)),
+            subgroupMax(select(0u, word, g_lane == 4u)), subgroupMax(select(0u, word, g_lane == 5u)),
+            subgroupMax(select(0u, word, g_lane == 6u)), subgroupMax(select(0u, word, g_lane == 7u)),
+            subgroupMax(select(0u, word, g_lane == 8u)), subgroupMax(select(0u, word, g_lane == 9u)),
+            subgroupMax(select(0u, word, g_lane == 10u)), subgroupMax(select(0u, word, g_lane == 11u)),
+            subgroupMax(select(0u, word, g_lane == 12u)), subgroupMax(select(0u, word, g_lane == 13u)),
+            subgroupMax(select(0u, word, g_lane == 14u)), subgroupMax(select(0u, word, g_lane == 15u)),
+        );
+    }
     if VEC16_PER_WG == 1u {
         return array<u32, 16>(
             subgroupBroadcast(word, 0u), subgroupBroadcast(word, 1u), subgroupBroadcast(word, 2u),

@@ -23,8 +23,12 @@ use super::scene_arg::{builtin_names, load_scene_and_views};
 pub enum VectorArg {
     /// Subgroups when the adapter has fixed 16k-wide ones, else workgroups.
     Auto,
-    /// 16 lanes of a subgroup (needs fixed subgroups of 16, 32 or 64).
+    /// 16 lanes of a subgroup (needs fixed subgroups of 16, 32 or 64), sharing BVH words by
+    /// broadcasts.
     Subgroup,
+    /// As subgroup, sharing BVH words by reductions (faster on lavapipe from Mesa 24.3 on;
+    /// the automatic choice there).
+    SubgroupReduce,
     /// A 16-invocation workgroup exchanging through workgroup memory (works everywhere).
     Workgroup,
     /// Four such vectors in a 64-invocation workgroup (fills a GPU's warps).
@@ -37,6 +41,7 @@ impl VectorArg {
         match self {
             VectorArg::Auto => None,
             VectorArg::Subgroup => Some(VectorVariant::Subgroup),
+            VectorArg::SubgroupReduce => Some(VectorVariant::SubgroupReduce),
             VectorArg::Workgroup => Some(VectorVariant::Workgroup),
             VectorArg::Workgroup4 => Some(VectorVariant::Workgroup4),
         }

@@ -152,7 +152,7 @@ impl PrimaryPass {
             PrimaryTracer::PerRay => ("primary", &[][..], None, 1),
             PrimaryTracer::Mft => {
                 let (variant, per_wg) = VectorVariant::choose(&ctx.info, variant)?;
-                constants.push(("VEC16_PER_WG", f64::from(per_wg)));
+                constants.extend(variant.constants(per_wg));
                 ("primary_mft", variant.aliases(), Some(variant), per_wg)
             }
         };

@@ -98,7 +98,7 @@ impl ShadowTracer {
             }
         }
         let aliases: &[(&str, &str)] = if tracer.uses_vector() {
-            constants.push(("VEC16_PER_WG", f64::from(vectors_per_workgroup)));
+            constants.extend(variant.constants(vectors_per_workgroup));
             variant.aliases()
         } else {
             &[]

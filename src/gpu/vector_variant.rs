@@ -9,7 +9,12 @@ use crate::{Error, Result};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum VectorVariant {
     /// 16 lanes of a subgroup; needs subgroups of a fixed size that is a multiple of 16.
+    /// Lanes share BVH words by broadcasts.
     Subgroup,
+    /// As [`VectorVariant::Subgroup`], but with one vector per subgroup the lanes share
+    /// BVH words by reductions (`shared/vec16_subgroup`'s `VEC16_WORDS_BY_REDUCTION`):
+    /// the choice for lavapipe from Mesa 24.3 on (see [`VectorVariant::choose`]).
+    SubgroupReduce,
     /// A 16-invocation workgroup exchanging through workgroup memory; works everywhere.
     /// The choice for a CPU (lavapipe), which runs a workgroup as a loop over its
     /// invocations.
@@ -24,6 +29,7 @@ impl std::fmt::Display for VectorVariant {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
             VectorVariant::Subgroup => "subgroup",
+            VectorVariant::SubgroupReduce => "subgroup-reduce",
             VectorVariant::Workgroup => "workgroup",
             VectorVariant::Workgroup4 => "workgroup4",
         })
@@ -35,6 +41,9 @@ impl VectorVariant {
     /// else subgroups when they are a fixed multiple of 16 wide, else workgroups of one
     /// vector on a CPU and of four elsewhere. Returns the variant and the number of
     /// vectors per workgroup (the kernels' `VEC16_PER_WG`).
+    ///
+    /// Subgroups share words by reductions on lavapipe from Mesa 24.3 on and by broadcasts
+    /// elsewhere ([`reductions_share_words_faster`]); both give the same bits.
     pub fn choose(info: &AdapterSummary, forced: Option<VectorVariant>) -> Result<(VectorVariant, u32)> {
         let size = info.subgroup_min_size;
         let subgroup_ok = info.has_subgroups
@@ -44,16 +53,21 @@ impl VectorVariant {
         match forced {
             Some(VectorVariant::Workgroup) => Ok((VectorVariant::Workgroup, 1)),
             Some(VectorVariant::Workgroup4) => Ok((VectorVariant::Workgroup4, MAX_VEC16_PER_WG)),
-            Some(VectorVariant::Subgroup) if !subgroup_ok => Err(Error::Gpu(format!(
-                "the subgroup vector needs subgroups of one fixed size that is a multiple of 16; \
+            Some(v @ (VectorVariant::Subgroup | VectorVariant::SubgroupReduce)) if !subgroup_ok => {
+                Err(Error::Gpu(format!(
+                    "the {v} vector needs subgroups of one fixed size that is a multiple of 16; \
                  {} has {}subgroups of {}..{} lanes (on lavapipe set LP_NATIVE_VECTOR_WIDTH=512 \
                  for 16-wide subgroups, or use --vector workgroup)",
-                info.name,
-                if info.has_subgroups { "" } else { "no " },
-                info.subgroup_min_size,
-                info.subgroup_max_size
-            ))),
-            Some(VectorVariant::Subgroup) => Ok((VectorVariant::Subgroup, size / 16)),
+                    info.name,
+                    if info.has_subgroups { "" } else { "no " },
+                    info.subgroup_min_size,
+                    info.subgroup_max_size
+                )))
+            }
+            Some(v @ (VectorVariant::Subgroup | VectorVariant::SubgroupReduce)) => Ok((v, size / 16)),
+            None if subgroup_ok && reductions_share_words_faster(info) => {
+                Ok((VectorVariant::SubgroupReduce, size / 16))
+            }
             None if subgroup_ok => Ok((VectorVariant::Subgroup, size / 16)),
             None if info.device_type == wgpu::DeviceType::Cpu => Ok((VectorVariant::Workgroup, 1)),
             None => Ok((VectorVariant::Workgroup4, MAX_VEC16_PER_WG)),
@@ -63,10 +77,64 @@ impl VectorVariant {
     /// The kernel alias that selects this variant's implementation of `shared/vec16`.
     pub(crate) fn aliases(self) -> &'static [(&'static str, &'static str)] {
         match self {
-            VectorVariant::Subgroup => &[("shared/vec16", "shared/vec16_subgroup")],
+            VectorVariant::Subgroup | VectorVariant::SubgroupReduce => {
+                &[("shared/vec16", "shared/vec16_subgroup")]
+            }
             VectorVariant::Workgroup | VectorVariant::Workgroup4 => {
                 &[("shared/vec16", "shared/vec16_workgroup")]
             }
         }
+    }
+
+    /// Whether the variant's vector lives in one subgroup (needs `Features::SUBGROUP`).
+    pub fn uses_subgroups(self) -> bool {
+        matches!(self, VectorVariant::Subgroup | VectorVariant::SubgroupReduce)
+    }
+
+    /// The kernels' override constants for this variant with `per_wg` vectors per
+    /// workgroup: `VEC16_PER_WG`, and for subgroups `VEC16_WORDS_BY_REDUCTION`.
+    pub(crate) fn constants(self, per_wg: u32) -> Vec<(&'static str, f64)> {
+        let mut c = vec![("VEC16_PER_WG", f64::from(per_wg))];
+        if self.uses_subgroups() {
+            let reduce = self == VectorVariant::SubgroupReduce;
+            c.push(("VEC16_WORDS_BY_REDUCTION", f64::from(u8::from(reduce))));
+        }
+        c
+    }
+}
+
+/// Whether lanes of a subgroup vector share words faster by reductions than by broadcasts:
+/// on lavapipe from Mesa 24.3 on. naga writes `subgroupBroadcast` as a SPIR-V shuffle, which
+/// lavapipe runs at 16 lanes as a loop over the lanes; Mesa 24.3 made reductions loops
+/// unrolled at compile time (commit dfa314e805e, "lavapipe: Implement clustered
+/// reductions"). Measured (Sponza atrium, 1024², MFT shadow pass): reductions 2.0× (AVX-512
+/// code) and 4.0× (AVX2 code) faster on Mesa 25.0.7, 1.5–2.3× slower on Mesa 22.3.6. Mesa
+/// 23.0–24.2 were not measured. GPUs broadcast in one instruction.
+pub fn reductions_share_words_faster(info: &AdapterSummary) -> bool {
+    info.driver == "llvmpipe" && mesa_version(&info.driver_info).is_some_and(|v| v >= (24, 3))
+}
+
+/// The major and minor version in a Mesa driver string such as
+/// `Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)`.
+fn mesa_version(driver_info: &str) -> Option<(u32, u32)> {
+    let rest = &driver_info[driver_info.find("Mesa ")? + 5..];
+    let mut parts = rest.split(|c: char| !c.is_ascii_digit());
+    let major = parts.next()?.parse().ok()?;
+    let minor = parts.next()?.parse().ok()?;
+    Some((major, minor))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mesa_version_reads_the_driver_strings_of_both_lavapipes() {
+        assert_eq!(mesa_version("Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)"), Some((25, 0)));
+        assert_eq!(mesa_version("Mesa 22.3.6 (LLVM 15.0.6)"), Some((22, 3)));
+        assert_eq!(mesa_version("Mesa 24.3.0-devel (git-1234)"), Some((24, 3)));
+        assert_eq!(mesa_version("NVIDIA 550.54"), None);
+        assert_eq!(mesa_version("Mesa 25"), None);
+        assert_eq!(mesa_version("Mesa "), None);
     }
 }

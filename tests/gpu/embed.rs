@@ -293,15 +293,17 @@ fn a_device_without_the_required_limits_or_features_gets_the_documented_error() 
     }))
     .unwrap();
     let plain = GpuContext::from_device(&device, &queue);
-    let forced = ShadowSettings {
-        variant: Some(VectorVariant::Subgroup),
-        ..Default::default()
-    };
-    match ShadowPass::new(&plain, forced) {
-        Err(Error::DeviceUnsupported { missing, .. }) => {
-            assert_eq!(missing, ["feature SUBGROUP"]);
+    for variant in [VectorVariant::Subgroup, VectorVariant::SubgroupReduce] {
+        let forced = ShadowSettings {
+            variant: Some(variant),
+            ..Default::default()
+        };
+        match ShadowPass::new(&plain, forced) {
+            Err(Error::DeviceUnsupported { missing, .. }) => {
+                assert_eq!(missing, ["feature SUBGROUP"], "{variant}");
+            }
+            other => panic!("{variant}: expected DeviceUnsupported, got {other:?}"),
         }
-        other => panic!("expected DeviceUnsupported, got {other:?}"),
     }
     // The same device runs the pass with the default settings: the requirements are enough.
     let pass = ShadowPass::new(&plain, ShadowSettings::default()).unwrap();

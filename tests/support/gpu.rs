@@ -51,11 +51,12 @@ pub fn ray_query_ctx() -> Result<&'static GpuContext, &'static str> {
 }
 
 /// The variants this adapter can run: always workgroup (one vector and four per workgroup),
-/// subgroup when it has fixed 16k-wide subgroups.
+/// subgroup with broadcasts and with reductions when it has fixed 16k-wide subgroups.
 pub fn variants() -> Vec<VectorVariant> {
     let mut v = vec![VectorVariant::Workgroup, VectorVariant::Workgroup4];
     if VectorVariant::choose(&ctx().info, Some(VectorVariant::Subgroup)).is_ok() {
         v.push(VectorVariant::Subgroup);
+        v.push(VectorVariant::SubgroupReduce);
     }
     v
 }

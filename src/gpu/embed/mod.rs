@@ -124,7 +124,8 @@ pub struct ShadowPass {
 impl ShadowPass {
     /// Features the device must have: none. [`wgpu::Features::SUBGROUP`] is used when the
     /// device has it (and its subgroups are a fixed multiple of 16 wide), and required only
-    /// when [`ShadowSettings::variant`] forces [`VectorVariant::Subgroup`].
+    /// when [`ShadowSettings::variant`] forces a subgroup variant
+    /// ([`VectorVariant::uses_subgroups`]).
     pub fn required_features() -> wgpu::Features {
         wgpu::Features::empty()
     }
@@ -190,7 +191,7 @@ impl ShadowPass {
     pub fn check_device(device: &wgpu::Device, settings: &ShadowSettings) -> Result<()> {
         let mut missing = Vec::new();
         let mut features = ShadowPass::required_features();
-        if settings.variant == Some(VectorVariant::Subgroup) {
+        if settings.variant.is_some_and(VectorVariant::uses_subgroups) {
             features |= wgpu::Features::SUBGROUP;
         }
         let absent = features - device.features();
