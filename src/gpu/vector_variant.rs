@@ -105,7 +105,7 @@ impl VectorVariant {
 
 /// Whether lanes of a subgroup vector share words faster by reductions than by broadcasts:
 /// on lavapipe from Mesa 24.3 on. naga writes `subgroupBroadcast` as a SPIR-V shuffle, which
-/// lavapipe runs at 16 lanes as a loop over the lanes; Mesa 24.3 made reductions loops
+/// lavapipe runs at 16 lanes as a loop over the lanes; since Mesa 24.3 its reductions are
 /// unrolled at compile time (commit dfa314e805e, "lavapipe: Implement clustered
 /// reductions"). Measured (Sponza atrium, 1024², MFT shadow pass): reductions 2.0× (AVX-512
 /// code) and 4.0× (AVX2 code) faster on Mesa 25.0.7, 1.5–2.3× slower on Mesa 22.3.6. Mesa
@@ -136,5 +136,39 @@ mod tests {
         assert_eq!(mesa_version("NVIDIA 550.54"), None);
         assert_eq!(mesa_version("Mesa 25"), None);
         assert_eq!(mesa_version("Mesa "), None);
+    }
+
+    fn lavapipe(driver_info: &str, subgroup_size: u32) -> AdapterSummary {
+        AdapterSummary {
+            name: "llvmpipe (LLVM 15.0.6, 512 bits)".into(),
+            backend: wgpu::Backend::Vulkan,
+            device_type: wgpu::DeviceType::Cpu,
+            driver: "llvmpipe".into(),
+            driver_info: driver_info.into(),
+            subgroup_min_size: subgroup_size,
+            subgroup_max_size: subgroup_size,
+            has_subgroups: true,
+            has_timestamps: true,
+            max_storage_buffer_binding_size: 1 << 30,
+            max_compute_workgroups_per_dimension: 65535,
+        }
+    }
+
+    #[test]
+    fn lavapipe_gets_reductions_from_mesa_24_3_and_broadcasts_before() {
+        let choose = |info: &str, size| VectorVariant::choose(&lavapipe(info, size), None).unwrap();
+        let new = "Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)";
+        assert_eq!(choose(new, 16), (VectorVariant::SubgroupReduce, 1));
+        assert_eq!(choose("Mesa 24.3.1", 16), (VectorVariant::SubgroupReduce, 1));
+        assert_eq!(choose("Mesa 24.2.8", 16), (VectorVariant::Subgroup, 1));
+        assert_eq!(
+            choose("Mesa 22.3.6 (LLVM 15.0.6)", 16),
+            (VectorVariant::Subgroup, 1)
+        );
+        // 8-wide subgroups cannot hold a vector; forcing still works where they can.
+        assert_eq!(choose(new, 8), (VectorVariant::Workgroup, 1));
+        let forced = VectorVariant::choose(&lavapipe(new, 16), Some(VectorVariant::Subgroup));
+        assert_eq!(forced.unwrap(), (VectorVariant::Subgroup, 1));
+        assert!(VectorVariant::choose(&lavapipe(new, 8), Some(VectorVariant::SubgroupReduce)).is_err());
     }
 }
