@@ -58,12 +58,11 @@ fn group_may(b: bool) -> bool {
 const VEC16_LANE_WORDS: bool = true;
 
 // How vec16_words hands the lanes each other's words when a subgroup holds one vector:
-// false, one broadcast per lane (subgroupBroadcast with a constant lane: one instruction
-// on a GPU); true, one reduction per lane (subgroupMax of the word in its own lane and 0
-// in the others). naga writes a broadcast as a SPIR-V shuffle, which lavapipe runs at 16
-// lanes as a loop over the lanes; its reductions are unrolled vector code from Mesa 24.3
-// on and loops before. Same bits either way; the host picks by driver
-// (VectorVariant::SubgroupReduce).
+// false, one broadcast per lane (subgroupBroadcast with a constant lane); true, one
+// reduction per lane (subgroupMax of the word in its own lane and 0 in the others). naga
+// writes a broadcast as a SPIR-V shuffle, which lavapipe runs at 16 lanes as a loop over
+// the lanes; its reductions are unrolled vector code from Mesa 24.3 on and loops before.
+// Same bits either way; the host picks by driver (VectorVariant::SubgroupReduce).
 override VEC16_WORDS_BY_REDUCTION: bool = false;
 
 // The 16 lanes' `word`s, in lane order, in every lane of the vector.

@@ -109,7 +109,7 @@ impl VectorVariant {
 /// unrolled at compile time (commit dfa314e805e, "lavapipe: Implement clustered
 /// reductions"). Measured (Sponza atrium, 1024², MFT shadow pass): reductions 2.0× (AVX-512
 /// code) and 4.0× (AVX2 code) faster on Mesa 25.0.7, 1.5–2.3× slower on Mesa 22.3.6. Mesa
-/// 23.0–24.2 were not measured. GPUs broadcast in one instruction.
+/// 23.0–24.2 were not measured; nor were GPUs, which keep broadcasts.
 pub fn reductions_share_words_faster(info: &AdapterSummary) -> bool {
     info.driver == "llvmpipe" && mesa_version(&info.driver_info).is_some_and(|v| v >= (24, 3))
 }
