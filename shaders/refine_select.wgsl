@@ -27,6 +27,38 @@
 // [i]: the score of the i-th pixel listed (refine_score).
 @group(0) @binding(6) var<storage, read_write> scores: array<f32>;
 
+// [`similar`] for the tap at index `ix` (inside the image): one load of its normal and depth
+// (`normal[ix]`; the depth rides in w), one of its visibility.
+fn similar_tap(ix: u32, d_c: f32, n_c: vec3<f32>, v_c: f32) -> bool {
+    return similar(normal[ix], values[ix].w, d_c, n_c, v_c);
+}
+
+// The taps of the window around (x, y) the filter uses: those at a similar depth, normal and
+// unfiltered visibility whose mirror image through the centre is used too (the centre always
+// is). The centre must have a hit (depth > 0).
+fn paired_taps(x: u32, y: u32) -> u32 {
+    let c_ix = y * filter_params.width + x;
+    let d_c = depth[c_ix];
+    let n_c = normal[c_ix].xyz;
+    let v_c = values[c_ix].w;
+    // Same order as the CPU twin (dy outer, dx inner, increasing); a tap beyond the border is
+    // read clamped and not counted.
+    var accepted = 1u << 12u; // the centre always counts, whatever the tolerances
+    for (var dy = -2; dy <= 2; dy++) {
+        for (var dx = -2; dx <= 2; dx++) {
+            let nx = i32(x) + dx;
+            let ny = i32(y) + dy;
+            let similar = similar_tap(clamped_pixel(nx, ny), d_c, n_c, v_c);
+            accepted |= select(0u, 1u << u32((dy + 2) * 5 + dx + 2), inside_image(nx, ny) & similar);
+        }
+    }
+    // Only taps whose mirror image through the centre is accepted too: the
+    // used taps stay symmetric about the pixel where a silhouette, crease,
+    // sharp shadow edge or the image border cuts the window, so the mean is
+    // not pulled towards one side (bit k's mirror is bit 24 - k).
+    return accepted & (reverseBits(accepted) >> 7u);
+}
+
 // Whether the unfiltered visibility changes at or around (x, y): the pixel is neither fully lit
 // nor in umbra, or a neighbour of its window with geometry has another visibility.
 fn visibility_varies(x: u32, y: u32) -> bool {
