@@ -35,7 +35,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     // half a pixel off). Weights are powers of two: every product is exact.
     // The taps go in mirror pairs through the centre (tap k = (dy + 2) · 5 + dx + 2 and
     // tap 24 - k, k < 12): a pair counts when both are similar (the rule of
-    // refine_select's paired_taps), so each tap is loaded once. The sum: centre first,
+    // shared/filter_window's paired_taps), so each tap is loaded once. The sum: centre first,
     // then pair by pair, k increasing.
     var sum = v_c;
     var weight_sum = 1.0;

@@ -15,65 +15,33 @@
 // The filter's parameters with the refinement's visibility tolerance (one ray: tighter than
 // the filter's), so a window is cut wherever a neighbour differs by more than one ray.
 @group(0) @binding(0) var<uniform> filter_params: FilterParams;
-// The filter's inputs: (irradiance rgb, unfiltered visibility), depth (0 = no hit), normal.
-@group(0) @binding(1) var<storage, read> values: array<vec4<f32>>;
-@group(0) @binding(2) var<storage, read> depth: array<f32>;
-@group(0) @binding(3) var<storage, read> normal: array<vec4<f32>>;
+// The filter's input textures (shaders/filter.wgsl): (irradiance rgb, unfiltered visibility),
+// and (normal xyz, depth w; depth 0 = no hit).
+@group(0) @binding(1) var values: texture_2d<f32>;
+@group(0) @binding(2) var normal: texture_2d<f32>;
 // [0]: pixels listed; [1]: pixels with geometry (the ray budget's unit);
 // [2 + i]: the index of the i-th pixel listed (in no particular order). Cleared by the host.
-@group(0) @binding(4) var<storage, read_write> list: array<atomic<u32>>;
+@group(0) @binding(3) var<storage, read_write> list: array<atomic<u32>>;
 // The filter's output (visibility in w) at every pixel.
-@group(0) @binding(5) var<storage, read> filtered: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read> filtered: array<vec4<f32>>;
 // [i]: the score of the i-th pixel listed (refine_score).
-@group(0) @binding(6) var<storage, read_write> scores: array<f32>;
-
-// [`similar`] for the tap at index `ix` (inside the image): one load of its normal and depth
-// (`normal[ix]`; the depth rides in w), one of its visibility.
-fn similar_tap(ix: u32, d_c: f32, n_c: vec3<f32>, v_c: f32) -> bool {
-    return similar(normal[ix], values[ix].w, d_c, n_c, v_c);
-}
-
-// The taps of the window around (x, y) the filter uses: those at a similar depth, normal and
-// unfiltered visibility whose mirror image through the centre is used too (the centre always
-// is). The centre must have a hit (depth > 0).
-fn paired_taps(x: u32, y: u32) -> u32 {
-    let c_ix = y * filter_params.width + x;
-    let d_c = depth[c_ix];
-    let n_c = normal[c_ix].xyz;
-    let v_c = values[c_ix].w;
-    // Same order as the CPU twin (dy outer, dx inner, increasing); a tap beyond the border is
-    // read clamped and not counted.
-    var accepted = 1u << 12u; // the centre always counts, whatever the tolerances
-    for (var dy = -2; dy <= 2; dy++) {
-        for (var dx = -2; dx <= 2; dx++) {
-            let nx = i32(x) + dx;
-            let ny = i32(y) + dy;
-            let similar = similar_tap(clamped_pixel(nx, ny), d_c, n_c, v_c);
-            accepted |= select(0u, 1u << u32((dy + 2) * 5 + dx + 2), inside_image(nx, ny) & similar);
-        }
-    }
-    // Only taps whose mirror image through the centre is accepted too: the
-    // used taps stay symmetric about the pixel where a silhouette, crease,
-    // sharp shadow edge or the image border cuts the window, so the mean is
-    // not pulled towards one side (bit k's mirror is bit 24 - k).
-    return accepted & (reverseBits(accepted) >> 7u);
-}
+@group(0) @binding(5) var<storage, read_write> scores: array<f32>;
 
 // Whether the unfiltered visibility changes at or around (x, y): the pixel is neither fully lit
 // nor in umbra, or a neighbour of its window with geometry has another visibility.
 fn visibility_varies(x: u32, y: u32) -> bool {
-    let v_c = values[y * filter_params.width + x].w;
+    let v_c = textureLoad(values, vec2<u32>(x, y), 0).w;
     if v_c > 0.0 && v_c < 1.0 {
         return true;
     }
-    // A row of 5 taps without a branch (clamped_pixel: a tap beyond the border reads the
+    // A row of 5 taps without a branch (clamped_texel: a tap beyond the border reads the
     // border, a pixel inside the window too, so the answer is the same), then an exit if it
     // found a change; a branch per tap made this kernel up to twice as slow on Mesa 22.3.
     for (var dy = -2; dy <= 2; dy++) {
         var varies = false;
         for (var dx = -2; dx <= 2; dx++) {
-            let ix = clamped_pixel(i32(x) + dx, i32(y) + dy);
-            varies = varies | ((depth[ix] > 0.0) & (values[ix].w != v_c));
+            let t = clamped_texel(i32(x) + dx, i32(y) + dy);
+            varies = varies | ((textureLoad(normal, t, 0).w > 0.0) & (textureLoad(values, t, 0).w != v_c));
         }
         if varies {
             return true;
@@ -96,13 +64,13 @@ fn refine_score(x: u32, y: u32, taps: u32) -> f32 {
         }
         let dy = k / 5 - 2;
         let dx = k % 5 - 2;
-        let u = values[u32(i32(y) + dy) * filter_params.width + u32(i32(x) + dx)].w;
+        let u = textureLoad(values, vec2<i32>(i32(x) + dx, i32(y) + dy), 0).w;
         let w = select(1.0, 0.5, abs(dx) == 2) * select(1.0, 0.5, abs(dy) == 2);
         weight += w;
         variance += w * w * (u * (1.0 - u) / 16.0);
     }
     let pixel = y * filter_params.width + x;
-    let v_c = values[pixel].w;
+    let v_c = textureLoad(values, vec2<u32>(x, y), 0).w;
     var score = sqrt(variance) / weight;
     if v_c == 0.0 || v_c == 1.0 {
         score += abs(filtered[pixel].w - v_c);
@@ -116,14 +84,14 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let pixel = gid.y * filter_params.width + gid.x;
-    if depth[pixel] <= 0.0 {
+    if textureLoad(normal, gid.xy, 0).w <= 0.0 {
         return;
     }
     atomicAdd(&list[1], 1u);
     if !visibility_varies(gid.x, gid.y) {
         return;
     }
-    let v_c = values[pixel].w;
+    let v_c = textureLoad(values, gid.xy, 0).w;
     let agree = v_c == 0.0 || v_c == 1.0;
     let taps = paired_taps(gid.x, gid.y);
     if !agree && taps == FULL_WINDOW {

@@ -1,7 +1,7 @@
 // The discontinuity filter's window: which taps of a pixel's 5×5 window the filter averages.
-// Shared by the filter kernel and by the refinement's pixel selection (refine_select, which
-// lists a window's taps with `paired_taps`), so that both see the same window; they declare
-// `filter_params`. CPU twin: `paired_taps` in src/reference/filter.rs.
+// Shared by the filter kernel and by the refinement's pixel selection (refine_select), so that
+// both see the same window; they declare `filter_params` and the input textures `values`
+// and `normal` (shaders/filter.wgsl). CPU twin: `paired_taps` in src/reference/filter.rs.
 
 // Mirrors `FilterParams` in `src/reference/filter.rs`, 32 bytes; a naga test checks size and offsets.
 struct FilterParams {
@@ -30,12 +30,6 @@ fn clamped_texel(x: i32, y: i32) -> vec2<i32> {
     return vec2<i32>(clamp(x, 0, i32(filter_params.width) - 1), clamp(y, 0, i32(filter_params.height) - 1));
 }
 
-// The row-major index of [`clamped_texel`]`(x, y)`.
-fn clamped_pixel(x: i32, y: i32) -> u32 {
-    let c = clamped_texel(x, y);
-    return u32(c.y) * filter_params.width + u32(c.x);
-}
-
 // Whether a tap whose normal (xyz) and depth (w) are `tap` and whose unfiltered visibility is
 // `v_n` may be averaged with a centre of depth `d_c`, normal `n_c` and unfiltered visibility
 // `v_c`: a hit at a similar depth, normal and visibility (the tolerances of `filter_params`).
@@ -47,4 +41,36 @@ fn similar(tap: vec4<f32>, v_n: f32, d_c: f32, n_c: vec3<f32>, v_c: f32) -> bool
     return (d_n > 0.0) & (abs(d_n - d_c) <= filter_params.depth_tolerance * d_c)
         & (cos_nc >= filter_params.normal_tolerance)
         & (abs(v_n - v_c) <= filter_params.visibility_tolerance);
+}
+
+// [`similar`] for the tap at texel `t` (inside the image): one fetch of its normal and depth
+// (the depth rides in w), one of its visibility.
+fn similar_tap(t: vec2<i32>, d_c: f32, n_c: vec3<f32>, v_c: f32) -> bool {
+    return similar(textureLoad(normal, t, 0), textureLoad(values, t, 0).w, d_c, n_c, v_c);
+}
+
+// The taps of the window around (x, y) the filter uses: those at a similar depth, normal and
+// unfiltered visibility whose mirror image through the centre is used too (the centre always
+// is). The centre must have a hit (depth > 0).
+fn paired_taps(x: u32, y: u32) -> u32 {
+    let centre = textureLoad(normal, vec2<u32>(x, y), 0);
+    let d_c = centre.w;
+    let n_c = centre.xyz;
+    let v_c = textureLoad(values, vec2<u32>(x, y), 0).w;
+    // Same order as the CPU twin (dy outer, dx inner, increasing); a tap beyond the border is
+    // read clamped and not counted.
+    var accepted = 1u << 12u; // the centre always counts, whatever the tolerances
+    for (var dy = -2; dy <= 2; dy++) {
+        for (var dx = -2; dx <= 2; dx++) {
+            let nx = i32(x) + dx;
+            let ny = i32(y) + dy;
+            let similar = similar_tap(clamped_texel(nx, ny), d_c, n_c, v_c);
+            accepted |= select(0u, 1u << u32((dy + 2) * 5 + dx + 2), inside_image(nx, ny) & similar);
+        }
+    }
+    // Only taps whose mirror image through the centre is accepted too: the
+    // used taps stay symmetric about the pixel where a silhouette, crease,
+    // sharp shadow edge or the image border cuts the window, so the mean is
+    // not pulled towards one side (bit k's mirror is bit 24 - k).
+    return accepted & (reverseBits(accepted) >> 7u);
 }
