@@ -214,9 +214,9 @@ mod tests {
         );
         assert_eq!(mib(get("shaded values texture")), 16.0);
         assert_eq!(mib(get("normals texture")), 16.0);
-        // 64 + 4 + 16 + 4 + 16 + 16 + 16 buffer and 16 + 16 texture bytes per pixel, 16
+        // 64 + 4 + 16 + 16 + 16 + 16 buffer and 16 + 16 texture bytes per pixel, 16
         // staging, 11 MiB of state (176 words).
-        assert_eq!(mib(total_bytes(&buffers)), 136.0 + 32.0 + 16.0 + 11.0);
+        assert_eq!(mib(total_bytes(&buffers)), 132.0 + 32.0 + 16.0 + 11.0);
         assert_eq!(largest(&buffers).unwrap().label, "G-buffer");
     }
 

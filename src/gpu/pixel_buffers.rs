@@ -17,7 +17,7 @@ pub struct PixelBuffer {
 
 /// Every per-pixel buffer of a frame, in [`PixelBuffers`]' field order; the embedded pass
 /// has all but the last, `brdf` (it does not shade).
-pub const PIXEL_BUFFERS: [PixelBuffer; 7] = [
+pub const PIXEL_BUFFERS: [PixelBuffer; 6] = [
     PixelBuffer {
         label: "G-buffer",
         bytes_per_pixel: size_of::<GBufferTexel>() as u64,
@@ -29,10 +29,6 @@ pub const PIXEL_BUFFERS: [PixelBuffer; 7] = [
     PixelBuffer {
         label: "shaded values",
         bytes_per_pixel: 16,
-    },
-    PixelBuffer {
-        label: "depth",
-        bytes_per_pixel: 4,
     },
     PixelBuffer {
         label: "normals",
@@ -77,9 +73,8 @@ pub struct PixelBuffers {
     pub masks: wgpu::Buffer,
     /// `array<vec4<f32>>`: shaded irradiance (rgb) and visibility (a) before the filter.
     pub values: wgpu::Buffer,
-    /// `array<f32>`: eye distance per pixel (0: no hit), for the filter.
-    pub depth: wgpu::Buffer,
-    /// `array<vec4<f32>>`: shading normal (xyz) and eye distance again (w) per pixel, for the filter.
+    /// `array<vec4<f32>>`: shading normal (xyz) and eye distance (w; 0: no hit) per pixel,
+    /// for the filter.
     pub normal: wgpu::Buffer,
     /// `array<vec4<f32>>`: `values` after the filter (and the refinement).
     pub filtered: wgpu::Buffer,
@@ -124,7 +119,6 @@ impl PixelBuffers {
             gbuffer: next(),
             masks: next(),
             values: next(),
-            depth: next(),
             normal: next(),
             filtered: next(),
             brdf: with_brdf.then(next),

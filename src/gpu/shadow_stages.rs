@@ -90,7 +90,6 @@ impl ShadowStages {
                         buffer("gbuffer", &pixels.gbuffer),
                         buffer("masks", &pixels.masks),
                         buffer("values", &pixels.values),
-                        buffer("depth", &pixels.depth),
                         buffer("normal", &pixels.normal),
                         buffer("brdf", brdf),
                     ],
