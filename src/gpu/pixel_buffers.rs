@@ -2,6 +2,7 @@
 //! embedded pass allocate from [`PIXEL_BUFFERS`] (and the filter's input textures from
 //! [`FILTER_INPUT_TEXTURES`]), and [`super::memory`] sizes frames from the same lists.
 
+use super::buffers::texture_2d;
 use super::{GpuContext, empty_storage_buffer};
 use crate::Result;
 use crate::contract::layout::GBufferTexel;
@@ -99,20 +100,8 @@ impl PixelBuffers {
             .into_iter();
         let mut next = || made.next().expect("one buffer per field");
         let texture = |t: &PixelBuffer| {
-            ctx.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(t.label),
-                size: wgpu::Extent3d {
-                    width,
-                    height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: FILTER_INPUT_FORMAT,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            })
+            let usage = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
+            texture_2d(ctx, t.label, (width, height), FILTER_INPUT_FORMAT, usage)
         };
         Ok(PixelBuffers {
             size: (width, height),
@@ -122,8 +111,8 @@ impl PixelBuffers {
             normal: next(),
             filtered: next(),
             brdf: with_brdf.then(next),
-            values_texture: texture(&FILTER_INPUT_TEXTURES[0]),
-            normal_texture: texture(&FILTER_INPUT_TEXTURES[1]),
+            values_texture: texture(&FILTER_INPUT_TEXTURES[0])?,
+            normal_texture: texture(&FILTER_INPUT_TEXTURES[1])?,
         })
     }
 
