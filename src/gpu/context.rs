@@ -11,11 +11,40 @@ pub const ADAPTER_ENV: &str = "PENUMBRA_ADAPTER";
 /// its SIMD vectors, which sets its subgroup size (256, the default: 8 lanes; 512: 16).
 pub const LAVAPIPE_VECTOR_WIDTH_ENV: &str = "LP_NATIVE_VECTOR_WIDTH";
 
+/// Environment variable that names the folder of Mesa's on-disk shader cache (Mesa makes its
+/// cache folders inside it).
+pub const SHADER_CACHE_DIR_ENV: &str = "MESA_SHADER_CACHE_DIR";
+
+/// The folder for Mesa's shader cache that a process with [`LAVAPIPE_VECTOR_WIDTH_ENV`] set
+/// and [`SHADER_CACHE_DIR_ENV`] unset should use: `penumbra-lavapipe-<width>` in the user's
+/// cache folder (`$XDG_CACHE_HOME`, else `$HOME/.cache`, where Mesa keeps its own); `None`
+/// otherwise, or where neither variable names a folder.
+///
+/// Why: Mesa 25.0 lavapipe compiles one function per texture and kind of texel fetch and
+/// keeps it in the shader cache under a key without the vector width. A process at another
+/// width then calls a cached function compiled for the wrong one: `textureLoad` returns
+/// wrong texels (16 lanes after 8) or the process dies with SIGSEGV (8 after 16). Measured
+/// with Mesa 25.0.7 (LLVM 15); Mesa 22.3 compiles texel fetches inline and is not affected.
+/// One cache folder per width keeps them apart.
+pub fn lavapipe_shader_cache_dir() -> Option<std::path::PathBuf> {
+    let set = |name: &str| std::env::var_os(name).filter(|v| !v.is_empty());
+    let width = set(LAVAPIPE_VECTOR_WIDTH_ENV)?;
+    if set(SHADER_CACHE_DIR_ENV).is_some() {
+        return None;
+    }
+    let root = match set("XDG_CACHE_HOME") {
+        Some(dir) => std::path::PathBuf::from(dir),
+        None => std::path::PathBuf::from(set("HOME")?).join(".cache"),
+    };
+    let width = width.to_string_lossy();
+    Some(root.join(format!("penumbra-lavapipe-{width}")))
+}
+
 /// Environment variable that turns off Mesa's device-selection layer
 /// (`VK_LAYER_MESA_device_select`, an implicit Vulkan layer).
 pub const NO_DEVICE_SELECT_ENV: &str = "NODEVICE_SELECT";
 
-/// Sets two driver defaults for this process where the user has not set them, and returns
+/// Sets three driver defaults for this process where the user has not set them, and returns
 /// the names of the variables it set:
 ///
 /// - [`LAVAPIPE_VECTOR_WIDTH_ENV`]` = 512`: 16-wide lavapipe subgroups. At the default 8
@@ -27,6 +56,8 @@ pub const NO_DEVICE_SELECT_ENV: &str = "NODEVICE_SELECT";
 ///   device-selection layer connects to a Wayland display while listing devices, and there
 ///   libwayland prints "error: XDG_RUNTIME_DIR is invalid or not set in the environment."
 ///   twice; penumbra picks its adapter itself ([`GpuOptions`]), so the layer has nothing to do.
+/// - [`SHADER_CACHE_DIR_ENV`] = [`lavapipe_shader_cache_dir`] when the vector width is set
+///   (by the user or here): a shader cache of its own for each lavapipe width.
 ///
 /// # Safety
 ///
@@ -69,7 +100,16 @@ unsafe fn set_defaults(vector_width: bool) -> Vec<&'static str> {
         // SAFETY: the caller of the public functions guarantees that no other thread runs.
         unsafe { std::env::set_var(name, value) };
     }
-    set.into_iter().map(|(name, _)| name).collect()
+    let mut names: Vec<&'static str> = set.into_iter().map(|(name, _)| name).collect();
+    if let Some(dir) = lavapipe_shader_cache_dir() {
+        // Mesa makes its folders inside this one but not the folder itself. Where it cannot be
+        // made, Mesa runs without a cache (slower to start, still right).
+        let _ = std::fs::create_dir_all(&dir);
+        // SAFETY: as above.
+        unsafe { std::env::set_var(SHADER_CACHE_DIR_ENV, dir) };
+        names.push(SHADER_CACHE_DIR_ENV);
+    }
+    names
 }
 
 /// How to choose the GPU.

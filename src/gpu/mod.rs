@@ -34,7 +34,7 @@ mod vector_variant;
 pub use buffers::{empty_storage_buffer, read_buffer, read_texture, storage_buffer};
 pub use context::{
     ADAPTER_ENV, AdapterSummary, GpuContext, GpuOptions, LAVAPIPE_VECTOR_WIDTH_ENV, NO_DEVICE_SELECT_ENV,
-    set_driver_defaults, set_driver_defaults_for_drawing,
+    SHADER_CACHE_DIR_ENV, lavapipe_shader_cache_dir, set_driver_defaults, set_driver_defaults_for_drawing,
 };
 pub use embed::{
     NormalEncoding, ShadowInputs, ShadowPass, ShadowSettings, ShadowTargets, SurfaceInput, VISIBILITY_FORMAT,

@@ -81,6 +81,60 @@ fn render_on_lavapipe_runs_the_subgroup_vector_without_any_setting() {
     }
 }
 
+/// The binary gives lavapipe a shader cache of its own for the vector width it runs at
+/// (`penumbra-lavapipe-512` in the user's cache folder), so that processes at other widths do
+/// not share Mesa 25.0's cached texel fetches (gpu::lavapipe_shader_cache_dir); a cache folder
+/// the user named is kept.
+#[test]
+fn render_keeps_a_shader_cache_per_lavapipe_width() {
+    let dir = out_dir("shader-cache");
+    let cache_home = dir.join("cache-home");
+    let _ = std::fs::remove_dir_all(&cache_home);
+    let render = |user_cache: Option<&std::path::Path>| {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_penumbra"));
+        cmd.args(["render", "--size", "16x16"])
+            .env_remove(penumbra::gpu::LAVAPIPE_VECTOR_WIDTH_ENV)
+            .env_remove(penumbra::gpu::SHADER_CACHE_DIR_ENV)
+            .env("XDG_CACHE_HOME", &cache_home)
+            .current_dir(&dir);
+        if let Some(user_cache) = user_cache {
+            cmd.env(penumbra::gpu::SHADER_CACHE_DIR_ENV, user_cache);
+        }
+        let out = cmd.output().unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(
+            out.status.success(),
+            "{stdout}\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        stdout
+    };
+    let stdout = render(None);
+    let adapter = stdout.lines().find(|l| l.starts_with("adapter")).unwrap();
+    if !adapter.contains("llvmpipe") {
+        eprintln!("not lavapipe ({adapter}): the lavapipe cache folder does not apply");
+        return;
+    }
+    let own = cache_home.join("penumbra-lavapipe-512");
+    let entries = std::fs::read_dir(&own).map(|d| d.count()).unwrap_or(0);
+    assert!(
+        entries > 0,
+        "{} should hold Mesa's cache after a render",
+        own.display()
+    );
+
+    let user_cache = dir.join("user-cache");
+    let _ = std::fs::remove_dir_all(&user_cache);
+    std::fs::remove_dir_all(&own).unwrap();
+    render(Some(&user_cache));
+    assert!(!own.exists(), "a cache folder the user named must be kept");
+    assert!(
+        user_cache.exists(),
+        "{} should hold Mesa's cache",
+        user_cache.display()
+    );
+}
+
 /// A width the user set is kept: at `LP_NATIVE_VECTOR_WIDTH=256` lavapipe has 8-wide
 /// subgroups and `render` runs the workgroup vector.
 #[test]

@@ -14,8 +14,31 @@ pub fn ctx() -> &'static GpuContext {
         let ctx = GpuContext::new(&GpuOptions::default())
             .unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
         eprintln!("adapter: {}", ctx.info);
+        refuse_a_shared_lavapipe_cache(&ctx);
         ctx
     })
+}
+
+/// Fails the tests where lavapipe runs at a vector width set in the environment with Mesa's
+/// default shader cache: processes at other widths share that cache, and Mesa 25.0 then hands
+/// this one texel-fetch functions compiled for another width (wrong texels or SIGSEGV; see
+/// `lavapipe_shader_cache_dir`). The binaries do not set the variable themselves, because
+/// other test threads run by then.
+fn refuse_a_shared_lavapipe_cache(ctx: &GpuContext) {
+    if ctx.info.driver != "llvmpipe" {
+        return;
+    }
+    if let Some(dir) = penumbra::gpu::lavapipe_shader_cache_dir() {
+        panic!(
+            "{} is set but {} is not: run the GPU tests at this lavapipe width with a shader \
+             cache of their own, e.g. {}={} (Mesa 25.0 shares cached texel fetches between \
+             widths and then reads wrong texels)",
+            penumbra::gpu::LAVAPIPE_VECTOR_WIDTH_ENV,
+            penumbra::gpu::SHADER_CACHE_DIR_ENV,
+            penumbra::gpu::SHADER_CACHE_DIR_ENV,
+            dir.display()
+        );
+    }
 }
 
 /// Set (to anything) where the adapter must have ray queries (`.ci/run` on Mesa 25
