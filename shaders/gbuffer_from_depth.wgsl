@@ -12,10 +12,9 @@
 // xyz: world-space geometric normal, or the shading normal again when has_geo_normal == 0.
 @group(0) @binding(3) var geo_normal_texture: texture_2d<f32>;
 @group(0) @binding(4) var<storage, read_write> gbuffer: array<GBufferTexel>;
-// For the filter: eye distance (0 = no geometry) and unit shading normal per pixel, the
-// distance again in the normal's w (the filter reads both in one load).
-@group(0) @binding(5) var<storage, read_write> depth: array<f32>;
-@group(0) @binding(6) var<storage, read_write> normal: array<vec4<f32>>;
+// For the filter: the unit shading normal per pixel, and in w the eye distance (0 = no
+// geometry).
+@group(0) @binding(5) var<storage, read_write> normal: array<vec4<f32>>;
 
 @compute @workgroup_size(PIXEL_GROUP, PIXEL_GROUP)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -36,6 +35,5 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let p = gid.y * params.width + gid.x;
     gbuffer[p] = texel;
-    depth[p] = texel.depth;
     normal[p] = vec4<f32>(texel.normal, texel.depth);
 }

@@ -15,33 +15,33 @@
 // The filter's parameters with the refinement's visibility tolerance (one ray: tighter than
 // the filter's), so a window is cut wherever a neighbour differs by more than one ray.
 @group(0) @binding(0) var<uniform> filter_params: FilterParams;
-// The filter's inputs: (irradiance rgb, unfiltered visibility), depth (0 = no hit), normal.
-@group(0) @binding(1) var<storage, read> values: array<vec4<f32>>;
-@group(0) @binding(2) var<storage, read> depth: array<f32>;
-@group(0) @binding(3) var<storage, read> normal: array<vec4<f32>>;
+// The filter's input textures (shaders/filter.wgsl): (irradiance rgb, unfiltered visibility),
+// and (normal xyz, depth w; depth 0 = no hit).
+@group(0) @binding(1) var values: texture_2d<f32>;
+@group(0) @binding(2) var normal: texture_2d<f32>;
 // [0]: pixels listed; [1]: pixels with geometry (the ray budget's unit);
 // [2 + i]: the index of the i-th pixel listed (in no particular order). Cleared by the host.
-@group(0) @binding(4) var<storage, read_write> list: array<atomic<u32>>;
+@group(0) @binding(3) var<storage, read_write> list: array<atomic<u32>>;
 // The filter's output (visibility in w) at every pixel.
-@group(0) @binding(5) var<storage, read> filtered: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read> filtered: array<vec4<f32>>;
 // [i]: the score of the i-th pixel listed (refine_score).
-@group(0) @binding(6) var<storage, read_write> scores: array<f32>;
+@group(0) @binding(5) var<storage, read_write> scores: array<f32>;
 
 // Whether the unfiltered visibility changes at or around (x, y): the pixel is neither fully lit
 // nor in umbra, or a neighbour of its window with geometry has another visibility.
 fn visibility_varies(x: u32, y: u32) -> bool {
-    let v_c = values[y * filter_params.width + x].w;
+    let v_c = textureLoad(values, vec2<u32>(x, y), 0).w;
     if v_c > 0.0 && v_c < 1.0 {
         return true;
     }
-    // A row of 5 taps without a branch (clamped_pixel: a tap beyond the border reads the
+    // A row of 5 taps without a branch (clamped_texel: a tap beyond the border reads the
     // border, a pixel inside the window too, so the answer is the same), then an exit if it
     // found a change; a branch per tap made this kernel up to twice as slow on Mesa 22.3.
     for (var dy = -2; dy <= 2; dy++) {
         var varies = false;
         for (var dx = -2; dx <= 2; dx++) {
-            let ix = clamped_pixel(i32(x) + dx, i32(y) + dy);
-            varies = varies | ((depth[ix] > 0.0) & (values[ix].w != v_c));
+            let t = clamped_texel(i32(x) + dx, i32(y) + dy);
+            varies = varies | ((textureLoad(normal, t, 0).w > 0.0) & (textureLoad(values, t, 0).w != v_c));
         }
         if varies {
             return true;
@@ -64,13 +64,13 @@ fn refine_score(x: u32, y: u32, taps: u32) -> f32 {
         }
         let dy = k / 5 - 2;
         let dx = k % 5 - 2;
-        let u = values[u32(i32(y) + dy) * filter_params.width + u32(i32(x) + dx)].w;
+        let u = textureLoad(values, vec2<i32>(i32(x) + dx, i32(y) + dy), 0).w;
         let w = select(1.0, 0.5, abs(dx) == 2) * select(1.0, 0.5, abs(dy) == 2);
         weight += w;
         variance += w * w * (u * (1.0 - u) / 16.0);
     }
     let pixel = y * filter_params.width + x;
-    let v_c = values[pixel].w;
+    let v_c = textureLoad(values, vec2<u32>(x, y), 0).w;
     var score = sqrt(variance) / weight;
     if v_c == 0.0 || v_c == 1.0 {
         score += abs(filtered[pixel].w - v_c);
@@ -84,14 +84,14 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let pixel = gid.y * filter_params.width + gid.x;
-    if depth[pixel] <= 0.0 {
+    if textureLoad(normal, gid.xy, 0).w <= 0.0 {
         return;
     }
     atomicAdd(&list[1], 1u);
     if !visibility_varies(gid.x, gid.y) {
         return;
     }
-    let v_c = values[pixel].w;
+    let v_c = textureLoad(values, gid.xy, 0).w;
     let agree = v_c == 0.0 || v_c == 1.0;
     let taps = paired_taps(gid.x, gid.y);
     if !agree && taps == FULL_WINDOW {

@@ -12,12 +12,11 @@ override REFERENCE_RAYS: u32 = 0u;
 @group(0) @binding(0) var<uniform> params: ShadeParams;
 @group(0) @binding(1) var<storage, read> gbuffer: array<GBufferTexel>;
 @group(0) @binding(2) var<storage, read> masks: array<u32>;
-// Outputs for the filter: (radiance rgb, visibility), depth, normal (with the depth again in w).
+// Outputs for the filter: (radiance rgb, visibility), and the normal with the depth in w.
 @group(0) @binding(3) var<storage, read_write> values: array<vec4<f32>>;
-@group(0) @binding(4) var<storage, read_write> depth: array<f32>;
-@group(0) @binding(5) var<storage, read_write> normal: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read_write> normal: array<vec4<f32>>;
 // Diffuse BRDF albedo / pi (rgb); radiance = brdf * filtered irradiance.
-@group(0) @binding(6) var<storage, read_write> brdf: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read_write> brdf: array<vec4<f32>>;
 
 @compute @workgroup_size(PIXEL_GROUP, PIXEL_GROUP)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -27,7 +26,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let p = gid.y * params.width + gid.x;
     let texel = gbuffer[p];
     let mask = masks[p];
-    depth[p] = texel.depth;
     normal[p] = vec4<f32>(texel.normal, texel.depth);
     brdf[p] = vec4<f32>(texel.albedo / PI, 0.0);
     if (mask & MASK_SKY) != 0u {

@@ -1,7 +1,7 @@
 // The discontinuity filter's window: which taps of a pixel's 5×5 window the filter averages.
 // Shared by the filter kernel and by the refinement's pixel selection (refine_select), so that
-// both see the same window; they declare `filter_params`, `values`, `depth` and `normal`.
-// CPU twin: `paired_taps` in src/reference/filter.rs.
+// both see the same window; they declare `filter_params` and the input textures `values`
+// and `normal` (shaders/filter.wgsl). CPU twin: `paired_taps` in src/reference/filter.rs.
 
 // Mirrors `FilterParams` in `src/reference/filter.rs`, 32 bytes; a naga test checks size and offsets.
 struct FilterParams {
@@ -23,13 +23,11 @@ fn inside_image(x: i32, y: i32) -> bool {
     return (x >= 0) & (y >= 0) & (x < i32(filter_params.width)) & (y < i32(filter_params.height));
 }
 
-// The index of pixel (x, y) clamped onto the image: the window loops read every tap, one
-// beyond the border at the border, and leave out what they must without a branch per tap
-// (lavapipe runs such a branch as divergent control flow).
-fn clamped_pixel(x: i32, y: i32) -> u32 {
-    let cx = clamp(x, 0, i32(filter_params.width) - 1);
-    let cy = clamp(y, 0, i32(filter_params.height) - 1);
-    return u32(cy) * filter_params.width + u32(cx);
+// Pixel (x, y) clamped onto the image: the window loops read every tap, one beyond the
+// border at the border, and leave out what they must without a branch per tap (lavapipe
+// runs such a branch as divergent control flow).
+fn clamped_texel(x: i32, y: i32) -> vec2<i32> {
+    return vec2<i32>(clamp(x, 0, i32(filter_params.width) - 1), clamp(y, 0, i32(filter_params.height) - 1));
 }
 
 // Whether a tap whose normal (xyz) and depth (w) are `tap` and whose unfiltered visibility is
@@ -45,20 +43,20 @@ fn similar(tap: vec4<f32>, v_n: f32, d_c: f32, n_c: vec3<f32>, v_c: f32) -> bool
         & (abs(v_n - v_c) <= filter_params.visibility_tolerance);
 }
 
-// [`similar`] for the tap at index `ix` (inside the image): one load of its normal and depth
-// (`normal[ix]`; the depth rides in w), one of its visibility.
-fn similar_tap(ix: u32, d_c: f32, n_c: vec3<f32>, v_c: f32) -> bool {
-    return similar(normal[ix], values[ix].w, d_c, n_c, v_c);
+// [`similar`] for the tap at texel `t` (inside the image): one fetch of its normal and depth
+// (the depth rides in w), one of its visibility.
+fn similar_tap(t: vec2<i32>, d_c: f32, n_c: vec3<f32>, v_c: f32) -> bool {
+    return similar(textureLoad(normal, t, 0), textureLoad(values, t, 0).w, d_c, n_c, v_c);
 }
 
 // The taps of the window around (x, y) the filter uses: those at a similar depth, normal and
 // unfiltered visibility whose mirror image through the centre is used too (the centre always
 // is). The centre must have a hit (depth > 0).
 fn paired_taps(x: u32, y: u32) -> u32 {
-    let c_ix = y * filter_params.width + x;
-    let d_c = depth[c_ix];
-    let n_c = normal[c_ix].xyz;
-    let v_c = values[c_ix].w;
+    let centre = textureLoad(normal, vec2<u32>(x, y), 0);
+    let d_c = centre.w;
+    let n_c = centre.xyz;
+    let v_c = textureLoad(values, vec2<u32>(x, y), 0).w;
     // Same order as the CPU twin (dy outer, dx inner, increasing); a tap beyond the border is
     // read clamped and not counted.
     var accepted = 1u << 12u; // the centre always counts, whatever the tolerances
@@ -66,7 +64,7 @@ fn paired_taps(x: u32, y: u32) -> u32 {
         for (var dx = -2; dx <= 2; dx++) {
             let nx = i32(x) + dx;
             let ny = i32(y) + dy;
-            let similar = similar_tap(clamped_pixel(nx, ny), d_c, n_c, v_c);
+            let similar = similar_tap(clamped_texel(nx, ny), d_c, n_c, v_c);
             accepted |= select(0u, 1u << u32((dy + 2) * 5 + dx + 2), inside_image(nx, ny) & similar);
         }
     }

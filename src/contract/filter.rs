@@ -9,9 +9,10 @@ use bytemuck::{Pod, Zeroable};
 /// `shaders/shared/filter_window.wgsl` by [`crate::shaders::assemble`].
 ///
 /// Bindings, group 0: 0 `filter_params: FilterParams` (uniform), 1 `values:
-/// array<vec4<f32>>`, 2 `depth: array<f32>`, 3 `normal: array<vec4<f32>>`
-/// (the normal in xyz and the depth again in w; see [`normals_for_gpu`]), all read-only storage,
-/// and 4 `filtered: array<vec4<f32>>` (read-write storage, the output).
+/// texture_2d<f32>`, 2 `normal: texture_2d<f32>` (the normal in xyz and the depth in w;
+/// see [`normals_for_gpu`]), both width×height `Rgba32Float` textures
+/// ([`crate::gpu::FILTER_INPUT_TEXTURES`]), and 3 `filtered: array<vec4<f32>>`
+/// (read-write storage, the output, row-major).
 pub const FILTER_KERNEL: &str = "filter";
 
 /// Every tap of the window: bit `(dy + 2)·5 + (dx + 2)` for `dx, dy` in `−2 ..= 2`

@@ -1,4 +1,4 @@
-//! Storage buffers with size checks, and reading buffers back to the CPU.
+//! Storage buffers with size checks, 2-D textures, and reading buffers back to the CPU.
 
 use std::ops::Range;
 
@@ -31,6 +31,33 @@ pub fn storage_buffer<T: Pod>(
             label: Some(label),
             contents: bytes,
             usage: wgpu::BufferUsages::STORAGE | extra_usage,
+        })
+    })
+}
+
+/// A `width`×`height` 2-D texture of `format` with `usage`, one mip level, single-sampled;
+/// wgpu's validation and out-of-memory errors come back as [`Error::Gpu`] naming `label`.
+pub fn texture_2d(
+    ctx: &GpuContext,
+    label: &str,
+    (width, height): (u32, u32),
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> Result<wgpu::Texture> {
+    ctx.capture_errors(label, || {
+        ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
         })
     })
 }

@@ -15,7 +15,7 @@
 //! Uniform buffers, the 4 KiB of light points, status words and timestamp
 //! queries (under 100 KiB together) are not counted.
 
-use super::pixel_buffers::PIXEL_BUFFERS;
+use super::pixel_buffers::{FILTER_INPUT_TEXTURES, PIXEL_BUFFERS};
 use crate::bvh::Bvh;
 use crate::contract::layout::{BvhNode, BvhTriangle, GpuMaterial, GpuTexture, ShadingTriangle};
 use crate::scene::Scene;
@@ -83,13 +83,16 @@ pub fn scene_buffers(c: &SceneCounts) -> Vec<BufferSize> {
     ]
 }
 
-/// One `width`×`height` frame's buffers: the per-pixel buffers, the shadow
-/// pass's state for one chunk of tiles, and the largest read-back staging
-/// buffer (one exists at a time; the G-buffer is not read back unless asked).
+/// One `width`×`height` frame's buffers: the per-pixel buffers, the filter's
+/// input textures (as large as the values they copy, so no larger than the
+/// largest buffer), the shadow pass's state for one chunk of tiles, and the
+/// largest read-back staging buffer (one exists at a time; the G-buffer is not
+/// read back unless asked).
 pub fn frame_buffers(width: u32, height: u32) -> Vec<BufferSize> {
     let pixels = u64::from(width) * u64::from(height);
     let mut out: Vec<BufferSize> = PIXEL_BUFFERS
         .iter()
+        .chain(&FILTER_INPUT_TEXTURES)
         .map(|b| BufferSize {
             label: b.label,
             bytes: padded(pixels * b.bytes_per_pixel),
@@ -209,8 +212,11 @@ mod tests {
             get("shadow state"),
             128 * 128 * crate::gpu::shadow_tracer::STATE_WORDS * 4
         );
-        // 64 + 4 + 16 + 4 + 16 + 16 + 16 per pixel, 16 staging, 11 MiB of state (176 words).
-        assert_eq!(mib(total_bytes(&buffers)), 136.0 + 16.0 + 11.0);
+        assert_eq!(mib(get("shaded values texture")), 16.0);
+        assert_eq!(mib(get("normals texture")), 16.0);
+        // 64 + 4 + 16 + 16 + 16 + 16 buffer and 16 + 16 texture bytes per pixel, 16
+        // staging, 11 MiB of state (176 words).
+        assert_eq!(mib(total_bytes(&buffers)), 132.0 + 32.0 + 16.0 + 11.0);
         assert_eq!(largest(&buffers).unwrap().label, "G-buffer");
     }
 

@@ -41,7 +41,9 @@ pub use embed::{
 };
 pub use frame::{Ambient, Frame, image_of_lights};
 pub use motion::{MotionSettings, MotionUpdate};
-pub use pixel_buffers::{PIXEL_BUFFERS, PixelBuffer, PixelBuffers};
+pub use pixel_buffers::{
+    FILTER_INPUT_FORMAT, FILTER_INPUT_TEXTURES, PIXEL_BUFFERS, PixelBuffer, PixelBuffers,
+};
 pub use primary_pass::{PrimaryOptions, PrimaryPass, PrimaryStatus, PrimaryTracer};
 pub use ray_query::RayQueryScene;
 pub use render::{CpuShadows, Renderer};

@@ -1,7 +1,8 @@
 //! The per-pixel buffers of a frame, listed once: the standalone renderer and the
-//! embedded pass allocate from [`PIXEL_BUFFERS`], and [`super::memory`] sizes frames
-//! from the same list.
+//! embedded pass allocate from [`PIXEL_BUFFERS`] (and the filter's input textures from
+//! [`FILTER_INPUT_TEXTURES`]), and [`super::memory`] sizes frames from the same lists.
 
+use super::buffers::texture_2d;
 use super::{GpuContext, empty_storage_buffer};
 use crate::Result;
 use crate::contract::layout::GBufferTexel;
@@ -17,7 +18,7 @@ pub struct PixelBuffer {
 
 /// Every per-pixel buffer of a frame, in [`PixelBuffers`]' field order; the embedded pass
 /// has all but the last, `brdf` (it does not shade).
-pub const PIXEL_BUFFERS: [PixelBuffer; 7] = [
+pub const PIXEL_BUFFERS: [PixelBuffer; 6] = [
     PixelBuffer {
         label: "G-buffer",
         bytes_per_pixel: size_of::<GBufferTexel>() as u64,
@@ -29,10 +30,6 @@ pub const PIXEL_BUFFERS: [PixelBuffer; 7] = [
     PixelBuffer {
         label: "shaded values",
         bytes_per_pixel: 16,
-    },
-    PixelBuffer {
-        label: "depth",
-        bytes_per_pixel: 4,
     },
     PixelBuffer {
         label: "normals",
@@ -48,6 +45,23 @@ pub const PIXEL_BUFFERS: [PixelBuffer; 7] = [
     },
 ];
 
+/// The discontinuity filter's inputs as textures, in [`PixelBuffers`]' field order
+/// (`values_texture`, `normal_texture`): copies of `values` and `normal`, texel (x, y) =
+/// element y · width + x, which `shaders/filter.wgsl` reads (it says why textures).
+pub const FILTER_INPUT_TEXTURES: [PixelBuffer; 2] = [
+    PixelBuffer {
+        label: "shaded values texture",
+        bytes_per_pixel: 16,
+    },
+    PixelBuffer {
+        label: "normals texture",
+        bytes_per_pixel: 16,
+    },
+];
+
+/// The format of [`FILTER_INPUT_TEXTURES`]: one `vec4<f32>` per texel, as in the buffers.
+pub const FILTER_INPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
 /// A frame's per-pixel buffers (`COPY_SRC | COPY_DST`, so tests and the renderer read them
 /// back and the per-ray tracers clear the masks).
 #[derive(Debug)]
@@ -60,14 +74,17 @@ pub struct PixelBuffers {
     pub masks: wgpu::Buffer,
     /// `array<vec4<f32>>`: shaded irradiance (rgb) and visibility (a) before the filter.
     pub values: wgpu::Buffer,
-    /// `array<f32>`: eye distance per pixel (0: no hit), for the filter.
-    pub depth: wgpu::Buffer,
-    /// `array<vec4<f32>>`: shading normal (xyz) and eye distance again (w) per pixel, for the filter.
+    /// `array<vec4<f32>>`: shading normal (xyz) and eye distance (w; 0: no hit) per pixel,
+    /// for the filter.
     pub normal: wgpu::Buffer,
     /// `array<vec4<f32>>`: `values` after the filter (and the refinement).
     pub filtered: wgpu::Buffer,
     /// `array<vec4<f32>>`: albedo / π per pixel; `None` in the embedded pass.
     pub brdf: Option<wgpu::Buffer>,
+    /// `values` as a texture for the filter ([`PixelBuffers::record_filter_input_copies`]).
+    pub values_texture: wgpu::Texture,
+    /// `normal` as a texture for the filter ([`PixelBuffers::record_filter_input_copies`]).
+    pub normal_texture: wgpu::Texture,
 }
 
 impl PixelBuffers {
@@ -82,15 +99,68 @@ impl PixelBuffers {
             .collect::<Result<Vec<_>>>()?
             .into_iter();
         let mut next = || made.next().expect("one buffer per field");
+        let texture = |t: &PixelBuffer| {
+            let usage = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
+            texture_2d(ctx, t.label, (width, height), FILTER_INPUT_FORMAT, usage)
+        };
         Ok(PixelBuffers {
             size: (width, height),
             gbuffer: next(),
             masks: next(),
             values: next(),
-            depth: next(),
             normal: next(),
             filtered: next(),
             brdf: with_brdf.then(next),
+            values_texture: texture(&FILTER_INPUT_TEXTURES[0])?,
+            normal_texture: texture(&FILTER_INPUT_TEXTURES[1])?,
         })
+    }
+
+    /// Records the copies of `values` and `normal` into `values_texture` and
+    /// `normal_texture`, for a filter recorded after them.
+    pub fn record_filter_input_copies(&self, encoder: &mut wgpu::CommandEncoder) {
+        copy_pixels_to_texture(encoder, &self.values, &self.values_texture, self.size);
+        copy_pixels_to_texture(encoder, &self.normal, &self.normal_texture, self.size);
+    }
+}
+
+/// Records the copy of `buffer` (`width`×`height` texels of 16 bytes, row-major, rows
+/// packed) into `texture`: one copy where a row's bytes are a multiple of wgpu's row
+/// alignment (256 bytes: widths that are multiples of 16), one copy per row otherwise
+/// (a one-row copy needs no row pitch).
+fn copy_pixels_to_texture(
+    encoder: &mut wgpu::CommandEncoder,
+    buffer: &wgpu::Buffer,
+    texture: &wgpu::Texture,
+    (width, height): (u32, u32),
+) {
+    let row_bytes = width * 16;
+    let rows_per_copy = if row_bytes % wgpu::COPY_BYTES_PER_ROW_ALIGNMENT == 0 {
+        height
+    } else {
+        1
+    };
+    for y in (0..height).step_by(rows_per_copy.max(1) as usize) {
+        encoder.copy_buffer_to_texture(
+            wgpu::TexelCopyBufferInfo {
+                buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: u64::from(y) * u64::from(row_bytes),
+                    bytes_per_row: (rows_per_copy > 1).then_some(row_bytes),
+                    rows_per_image: None,
+                },
+            },
+            wgpu::TexelCopyTextureInfo {
+                texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d { x: 0, y, z: 0 },
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::Extent3d {
+                width,
+                height: rows_per_copy,
+                depth_or_array_layers: 1,
+            },
+        );
     }
 }

@@ -18,7 +18,7 @@
 //! score `refine_select` gave each pixel, keeps the [`budget_pixels`] with the highest scores
 //! ([`within_budget`]) and writes them back before the gather.
 
-use super::kernel::{Checks, Kernel, buffer, uniform_buffer};
+use super::kernel::{Checks, Kernel, buffer, texture, uniform_buffer};
 use super::pixel_buffers::PixelBuffers;
 use super::{GpuContext, GpuScene, GpuTimer, ShadowImage, ShadowTracer, empty_storage_buffer, read_buffer};
 use crate::contract::groups::{LINE_GROUP, PIXEL_GROUP};
@@ -94,13 +94,15 @@ impl Refinement {
 
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         let p = b.pixels;
+        // The filter's input textures, filled for this frame's filter (a refined frame has one).
+        let values = p.values_texture.create_view(&Default::default());
+        let normal = p.normal_texture.create_view(&Default::default());
         let bind = self.select.bind(
             &ctx.device,
             &[
                 buffer("filter_params", b.selection_params),
-                buffer("values", &p.values),
-                buffer("depth", &p.depth),
-                buffer("normal", &p.normal),
+                texture("values", &values),
+                texture("normal", &normal),
                 buffer("list", &list),
                 buffer("filtered", &p.filtered),
                 buffer("scores", &scores),

@@ -6,7 +6,7 @@
 
 use std::sync::OnceLock;
 
-use super::kernel::{Checks, Kernel, buffer, uniform_buffer_on};
+use super::kernel::{Checks, Kernel, buffer, texture, uniform_buffer_on};
 use super::pixel_buffers::PixelBuffers;
 use super::refine::{RefineBuffers, Refinement};
 use super::{GpuContext, GpuScene, GpuTimer, ShadowTracer, Tracer, TracerOptions};
@@ -64,8 +64,9 @@ impl ShadowStages {
     }
 
     /// Records the visibility stage (`params`: its uniform, see [`VisibilityStage`]) and,
-    /// with `filter`, the filter, one invocation per pixel in 8×8 workgroups, timed as `shade` and
-    /// `filter` when a timer is given. Returns the buffer that holds the final values:
+    /// with `filter`, the copies of the filter's inputs into textures and the filter, one
+    /// invocation per pixel in 8×8 workgroups, timed as `shade` and `filter` (with the
+    /// copies) when a timer is given. Returns the buffer that holds the final values:
     /// `pixels.filtered`, or `pixels.values` without the filter.
     pub fn record_visibility_and_filter<'p>(
         &self,
@@ -89,7 +90,6 @@ impl ShadowStages {
                         buffer("gbuffer", &pixels.gbuffer),
                         buffer("masks", &pixels.masks),
                         buffer("values", &pixels.values),
-                        buffer("depth", &pixels.depth),
                         buffer("normal", &pixels.normal),
                         buffer("brdf", brdf),
                     ],
@@ -117,18 +117,29 @@ impl ShadowStages {
             return Ok(&pixels.values);
         };
         let params = uniform_buffer_on(device, "filter params", filter);
+        let values = pixels.values_texture.create_view(&Default::default());
+        let normal = pixels.normal_texture.create_view(&Default::default());
         let bind = self.filter.bind(
             device,
             &[
                 buffer("filter_params", &params),
-                buffer("values", &pixels.values),
-                buffer("depth", &pixels.depth),
-                buffer("normal", &pixels.normal),
+                texture("values", &values),
+                texture("normal", &normal),
                 buffer("filtered", &pixels.filtered),
             ],
         )?;
-        let writes = timer.and_then(|t| t.pass_writes("filter"));
-        self.filter.record(encoder, "filter", &bind, writes, groups);
+        // The copies into the filter's textures are timed with it, as `filter`.
+        let (start, end) = timer
+            .and_then(|t| t.span_writes("filter"))
+            .map_or((None, None), |(s, e)| (Some(s), Some(e)));
+        if start.is_some() {
+            encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("filter input copies"),
+                timestamp_writes: start,
+            });
+        }
+        pixels.record_filter_input_copies(encoder);
+        self.filter.record(encoder, "filter", &bind, end, groups);
         Ok(&pixels.filtered)
     }
 

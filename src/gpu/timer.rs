@@ -111,6 +111,29 @@ impl GpuTimer {
         })
     }
 
+    /// Timestamp writes that time a span of commands as one pass named `label`: the first
+    /// half for an (empty) compute pass before the span's first command, the second for the
+    /// compute pass that ends it. So copies, which no compute pass holds, are timed with
+    /// the pass they feed. `None` as for [`GpuTimer::pass_writes`].
+    pub fn span_writes(
+        &mut self,
+        label: &str,
+    ) -> Option<(
+        wgpu::ComputePassTimestampWrites<'_>,
+        wgpu::ComputePassTimestampWrites<'_>,
+    )> {
+        let whole = self.pass_writes(label)?;
+        let start = wgpu::ComputePassTimestampWrites {
+            end_of_pass_write_index: None,
+            ..whole.clone()
+        };
+        let end = wgpu::ComputePassTimestampWrites {
+            beginning_of_pass_write_index: None,
+            ..whole
+        };
+        Some((start, end))
+    }
+
     /// Records, after the timed passes, the commands that make their timestamps readable.
     pub fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder) {
         let n_passes = self.labels.len() as u32;

@@ -669,18 +669,14 @@ mod tests {
             })
             .collect();
         bindings.sort_by_key(|b| (b.0, b.1));
-        let read = AddressSpace::Storage {
-            access: StorageAccess::LOAD,
-        };
         let read_write = AddressSpace::Storage {
             access: StorageAccess::LOAD | StorageAccess::STORE,
         };
         let expected = [
             (0, 0, "filter_params", AddressSpace::Uniform),
-            (0, 1, "values", read),
-            (0, 2, "depth", read),
-            (0, 3, "normal", read),
-            (0, 4, "filtered", read_write),
+            (0, 1, "values", AddressSpace::Handle),
+            (0, 2, "normal", AddressSpace::Handle),
+            (0, 3, "filtered", read_write),
         ];
         let expected: Vec<(u32, u32, String, AddressSpace)> = expected
             .iter()

@@ -213,7 +213,7 @@ fn info_reports_gpu_memory_for_a_size() {
     let stdout = text(&out.stdout);
     assert!(stdout.contains("GPU memory"), "{stdout}");
     assert!(
-        stdout.contains("  frame      163.00 MiB for 1024x1024 (G-buffer 64.00 MiB, "),
+        stdout.contains("  frame      191.00 MiB for 1024x1024 (G-buffer 64.00 MiB, "),
         "{stdout}"
     );
     let out = penumbra(&["info", "lattice", "--size", "7x1"]);

@@ -188,9 +188,13 @@ fn primary_pass_matches_cpu_twin() {
 #[test]
 fn filter_matches_cpu_twin() {
     let start = Instant::now();
-    let (w, h) = (64, 48);
     let renderer = Renderer::new(ctx(), None).unwrap();
-    for s in assets::EMBEDDED_SCENES {
+    // 64 pixels wide: the filter's input textures are filled by one copy each; 61: one copy
+    // per row (a row of 61 × 16 bytes is not a multiple of wgpu's 256-byte row alignment).
+    for ((w, h), s) in [(64, 48), (61, 37)]
+        .into_iter()
+        .flat_map(|size| assets::EMBEDDED_SCENES.iter().map(move |s| (size, s)))
+    {
         let (scene, view) = embedded(s.name);
         let bvh = Bvh::build(&scene, &BvhSettings::default()).unwrap();
         let gpu_scene = GpuScene::new(ctx(), &scene, &bvh).unwrap();
@@ -219,9 +223,9 @@ fn filter_matches_cpu_twin() {
             .count();
         let exact = frame.filtered.iter().zip(&cpu).filter(|(a, b)| a == b).count();
         eprintln!(
-            "{}: filter GPU vs CPU max error {err:.2e} (pixel {at}), {exact} of {} pixels bit-equal; \
-             largest value {largest:.3}; the filter changed {changed} pixels; frame {ms:.0} ms, \
-             GPU filter {:.2} ms",
+            "{} {w}x{h}: filter GPU vs CPU max error {err:.2e} (pixel {at}), {exact} of {} pixels \
+             bit-equal; largest value {largest:.3}; the filter changed {changed} pixels; frame \
+             {ms:.0} ms, GPU filter {:.2} ms",
             s.name,
             cpu.len(),
             frame.pass_ms("filter"),

@@ -294,7 +294,6 @@ impl ShadowPass {
                 texture("normal_texture", &normal_view),
                 texture("geo_normal_texture", &geo_view),
                 buffer("gbuffer", &pixels.gbuffer),
-                buffer("depth", &pixels.depth),
                 buffer("normal", &pixels.normal),
             ],
         )?;

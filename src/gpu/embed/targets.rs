@@ -1,6 +1,7 @@
 //! What the embedded shadow pass writes, sized for one image: the visibility textures the
 //! host samples, and the pass's own per-pixel buffers.
 
+use super::super::buffers::texture_2d;
 use super::super::pixel_buffers::PixelBuffers;
 use super::super::{GpuContext, ShadowScratch, ShadowTracer, read_buffer};
 use crate::{Error, Result};
@@ -55,26 +56,12 @@ impl ShadowTargets {
             ));
         }
         let texture = |label: &str| {
-            ctx.capture_errors(label, || {
-                let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size: wgpu::Extent3d {
-                        width,
-                        height,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: VISIBILITY_FORMAT,
-                    usage: wgpu::TextureUsages::TEXTURE_BINDING
-                        | wgpu::TextureUsages::STORAGE_BINDING
-                        | wgpu::TextureUsages::COPY_SRC,
-                    view_formats: &[],
-                });
-                let view = texture.create_view(&Default::default());
-                (texture, view)
-            })
+            let usage = wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::COPY_SRC;
+            let texture = texture_2d(ctx, label, (width, height), VISIBILITY_FORMAT, usage)?;
+            let view = texture.create_view(&Default::default());
+            Ok::<_, Error>((texture, view))
         };
         let (unfiltered, unfiltered_view) = texture("unfiltered visibility")?;
         let (filtered, filtered_view) = texture("filtered visibility")?;
