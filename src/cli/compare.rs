@@ -82,25 +82,25 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let channel = Channel::from(args.channel);
     let m = ImageMetrics::of_pixels(&a.pixels, &b.pixels, channel);
     let (x, y) = (m.max_pixel as u32 % a.width, m.max_pixel as u32 / a.width);
-    println!("A         {}", args.test.display());
-    println!(
+    outln!("A         {}", args.test.display());
+    outln!(
         "B         {} ({}×{})",
         args.reference.display(),
         a.width,
         a.height
     );
-    println!(
+    outln!(
         "channel   {} ({} values)",
         format!("{:?}", args.channel).to_lowercase(),
         m.values
     );
-    println!("RMSE      {:.6}", m.rmse);
-    println!("MAE       {:.6}", m.mean_abs);
-    println!("max       {:.6} at ({x}, {y})", m.max_abs);
+    outln!("RMSE      {:.6}", m.rmse);
+    outln!("MAE       {:.6}", m.mean_abs);
+    outln!("max       {:.6} at ({x}, {y})", m.max_abs);
     if m.psnr.is_infinite() {
-        println!("PSNR      inf (identical)");
+        outln!("PSNR      inf (identical)");
     } else {
-        println!("PSNR      {:.2} dB (peak 1)", m.psnr);
+        outln!("PSNR      {:.2} dB (peak 1)", m.psnr);
     }
     if let Some(path) = &args.diff {
         let differences = pixel_differences(&a.pixels, &b.pixels, channel);
@@ -111,7 +111,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         };
         write_display_image(path, &image)?;
         let scale = args.diff_scale.map_or(m.max_abs, f64::from);
-        println!("wrote     {} (red = {scale:.6})", path.display());
+        outln!("wrote     {} (red = {scale:.6})", path.display());
     }
     Ok(())
 }

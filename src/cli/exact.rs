@@ -23,13 +23,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let (width, height) = args.size;
     let (scene, view) = load_scene_and_view(args.scene.as_deref(), args.view.as_deref())?;
     let bvh = Bvh::build(&scene, &args.bvh.settings())?;
-    println!(
+    outln!(
         "scene     {} — {} triangles, BVH {} nodes",
         scene.source.display(),
         scene.triangles.len(),
         bvh.nodes.len()
     );
-    println!(
+    outln!(
         "tracer    exact (CPU beam splitting), time budget {:.0} s",
         args.time_budget
     );
@@ -50,7 +50,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     progress!("\r{:40}\r", "");
     let visibility = visibility?;
     let seconds = start.elapsed().as_secs_f64();
-    println!(
+    outln!(
         "exact     {seconds:.2} s CPU wall, {:.3} ms per pixel",
         seconds * 1e3 / f64::from(width * height)
     );
@@ -60,6 +60,6 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         pixels: visibility,
     };
     write_float_image(&args.output, &image)?;
-    println!("wrote     {} (visibility)", args.output.display());
+    outln!("wrote     {} (visibility)", args.output.display());
     Ok(())
 }

@@ -36,22 +36,22 @@ pub fn run(args: &InfoArgs) -> penumbra::Result<()> {
     let stats = bvh.stats();
     let bounds = scene.bounds();
 
-    println!("scene        {}", scene.source.display());
-    println!("load         {load_ms:.1} ms");
-    println!("triangles    {}", scene.triangles.len());
+    outln!("scene        {}", scene.source.display());
+    outln!("load         {load_ms:.1} ms");
+    outln!("triangles    {}", scene.triangles.len());
     for w in scene.warnings.messages() {
-        println!("warning      {w}");
+        outln!("warning      {w}");
     }
-    println!("materials    {}", scene.materials.len());
-    println!("images       {}", scene.images.len());
-    println!("instances    {}", scene.instances.len());
+    outln!("materials    {}", scene.materials.len());
+    outln!("images       {}", scene.images.len());
+    outln!("instances    {}", scene.instances.len());
     let emitters = super::scene_arg::file_lights(&scene);
-    println!(
+    outln!(
         "lights       {} emissive quad(s) in the file (used when no view file is given)",
         emitters.lights.len()
     );
     for l in &emitters.lights {
-        println!(
+        outln!(
             "  quad       centre {:?} size {:.3} × {:.3} radiance {:?}",
             (l.corner + 0.5 * (l.edge_u + l.edge_v)).to_array(),
             l.edge_u.length(),
@@ -60,39 +60,40 @@ pub fn run(args: &InfoArgs) -> penumbra::Result<()> {
         );
     }
     for why in &emitters.unusable {
-        println!("  unusable   emissive geometry of {why}");
+        outln!("  unusable   emissive geometry of {why}");
     }
     match &scene.camera {
-        Some(c) => println!(
+        Some(c) => outln!(
             "camera       eye {:?} target {:?} fov {:.2}°",
             c.eye.to_array(),
             c.target.to_array(),
             c.fov_y_degrees
         ),
-        None => println!("camera       none"),
+        None => outln!("camera       none"),
     }
-    println!(
+    outln!(
         "bounds       min {:?} max {:?}",
         bounds.min.to_array(),
         bounds.max.to_array()
     );
-    println!(
+    outln!(
         "BVH          quality {:?}, max leaf size {}",
-        settings.quality, settings.max_leaf_size
+        settings.quality,
+        settings.max_leaf_size
     );
-    println!("  build      {:.2} ms", bvh.build_time.as_secs_f64() * 1e3);
-    println!("  nodes      {}", stats.nodes);
-    println!("  leaves     {}", stats.leaves);
+    outln!("  build      {:.2} ms", bvh.build_time.as_secs_f64() * 1e3);
+    outln!("  nodes      {}", stats.nodes);
+    outln!("  leaves     {}", stats.leaves);
     let hist: Vec<String> = stats
         .leaf_size_histogram
         .iter()
         .map(|(k, v)| format!("{k}:{v}"))
         .collect();
-    println!("  leaf sizes {}", hist.join(" "));
-    println!("  max depth  {}", stats.max_depth);
-    println!("  SAH cost   {:.2}", stats.sah_cost);
-    println!("  GPU bytes  {} (nodes + triangles)", stats.gpu_bytes);
-    println!(
+    outln!("  leaf sizes {}", hist.join(" "));
+    outln!("  max depth  {}", stats.max_depth);
+    outln!("  SAH cost   {:.2}", stats.sah_cost);
+    outln!("  GPU bytes  {} (nodes + triangles)", stats.gpu_bytes);
+    outln!(
         "  alpha      {} alpha-tested triangle(s) (MASK, or BLEND at cutoff {}), {} word(s) of masks",
         bvh.alpha.triangles,
         penumbra::contract::alpha::BLEND_ALPHA_CUTOFF,
@@ -110,7 +111,7 @@ fn print_memory(scene: &Scene, bvh: &Bvh, (width, height): (u32, u32)) {
         // here and fails a render, which decodes every texture.
         match texture_dimensions(scene, i) {
             Ok((w, h)) => texels += u64::from(w) * u64::from(h),
-            Err(e) => println!("warning      {e}; not counted below"),
+            Err(e) => outln!("warning      {e}; not counted below"),
         }
     }
     let list = |buffers: &[memory::BufferSize]| {
@@ -122,13 +123,13 @@ fn print_memory(scene: &Scene, bvh: &Bvh, (width, height): (u32, u32)) {
     };
     let scene_buffers = memory::scene_buffers(&memory::SceneCounts::new(scene, bvh, texels));
     let frame_buffers = memory::frame_buffers(width, height);
-    println!("GPU memory");
-    println!(
+    outln!("GPU memory");
+    outln!(
         "  scene      {} ({})",
         memory::format_bytes(memory::total_bytes(&scene_buffers)),
         list(&scene_buffers)
     );
-    println!(
+    outln!(
         "  frame      {} for {width}x{height} ({})",
         memory::format_bytes(memory::total_bytes(&frame_buffers)),
         list(&frame_buffers)
@@ -140,7 +141,7 @@ fn print_memory(scene: &Scene, bvh: &Bvh, (width, height): (u32, u32)) {
             .copied()
             .collect::<Vec<_>>(),
     ) {
-        println!(
+        outln!(
             "  largest    {} {} (must fit the adapter's storage-buffer binding limit)",
             big.label,
             memory::format_bytes(big.bytes)

@@ -10,6 +10,35 @@ macro_rules! progress {
     };
 }
 
+/// `println!` for the command's report on stdout, where a reader that stops early
+/// (`penumbra render | head -3`) is no error: the command still finishes its job (the image
+/// is written) and the lines nobody reads are dropped. Other write errors go to stderr.
+macro_rules! outln {
+    () => {
+        $crate::cli::write_stdout(format_args!("\n"))
+    };
+    ($($arg:tt)*) => {
+        $crate::cli::write_stdout(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
+/// `print!` as [`outln!`].
+macro_rules! out {
+    ($($arg:tt)*) => {
+        $crate::cli::write_stdout(format_args!($($arg)*))
+    };
+}
+
+/// Writes to stdout for [`outln!`] and [`out!`]: a closed pipe drops the text quietly.
+pub fn write_stdout(args: std::fmt::Arguments<'_>) {
+    use std::io::Write;
+    match std::io::stdout().lock().write_fmt(args) {
+        Ok(()) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {}
+        Err(e) => eprintln!("warning: writing to stdout: {e}"),
+    }
+}
+
 mod bench;
 mod compare;
 mod exact;

@@ -104,20 +104,20 @@ struct QualityReport {
 /// Prints, per region, its share of the pixels, then per method the region's
 /// share of the squared error and its RMSE.
 fn print_regions(results: &[MethodResult]) {
-    println!("error by region: share of the squared error (RMSE in the region)");
-    print!("  {:<18} {:>7}", "region", "pixels");
+    outln!("error by region: share of the squared error (RMSE in the region)");
+    out!("  {:<18} {:>7}", "region", "pixels");
     for r in results {
-        print!(" {:>18}", r.method);
+        out!(" {:>18}", r.method);
     }
-    println!();
+    outln!();
     for (i, region) in Region::ALL.iter().enumerate() {
         let share = results.first().map_or(0.0, |r| r.regions[i].pixel_share);
-        print!("  {:<18} {:>6.1}%", region.name(), 100.0 * share);
+        out!("  {:<18} {:>6.1}%", region.name(), 100.0 * share);
         for r in results {
             let e = &r.regions[i];
-            print!(" {:>9.1}% ({:.4})", 100.0 * e.error_share, e.rmse);
+            out!(" {:>9.1}% ({:.4})", 100.0 * e.error_share, e.rmse);
         }
-        println!();
+        outln!();
     }
 }
 
@@ -131,8 +131,8 @@ pub fn run(args: &QualityArgs) -> Result<()> {
         adapter: args.adapter.clone(),
         ..GpuOptions::default()
     })?;
-    println!("adapter   {}", ctx.info);
-    println!(
+    outln!("adapter   {}", ctx.info);
+    outln!(
         "scene     {} — {} triangles, {w}x{h}",
         scene.source.display(),
         scene.triangles.len()
@@ -244,13 +244,19 @@ pub fn run(args: &QualityArgs) -> Result<()> {
 
     let pick = |v: &[f32]| -> Vec<f32> { v.iter().zip(&hit).filter(|(_, h)| **h).map(|(x, _)| *x).collect() };
     let exact_hit = pick(&exact);
-    println!(
+    outln!(
         "exact     {exact_seconds:.2} s on the CPU; {} pixels with geometry compared",
         exact_hit.len()
     );
-    println!(
+    outln!(
         "  {:<18} {:>10} {:>8} {:>9} {:>9} {:>9} {:>8}",
-        "method", "GPU ms", "rays/px", "RMSE", "mean |e|", "max |e|", "PSNR dB"
+        "method",
+        "GPU ms",
+        "rays/px",
+        "RMSE",
+        "mean |e|",
+        "max |e|",
+        "PSNR dB"
     );
     let mut regions = classify_pixels(
         &gbuffer,
@@ -268,9 +274,12 @@ pub fn run(args: &QualityArgs) -> Result<()> {
     let mut results = Vec::new();
     for (name, values, ms, rays) in &methods {
         let m = ImageMetrics::of_values(&pick(values), &exact_hit);
-        println!(
+        outln!(
             "  {name:<18} {ms:>10.1} {rays:>8.1} {:>9.5} {:>9.5} {:>9.4} {:>8.2}",
-            m.rmse, m.mean_abs, m.max_abs, m.psnr
+            m.rmse,
+            m.mean_abs,
+            m.max_abs,
+            m.psnr
         );
         results.push(MethodResult {
             method: name.clone(),
@@ -303,7 +312,7 @@ pub fn run(args: &QualityArgs) -> Result<()> {
                 write_float_image(&dir.join(format!("{name}.{extension}")), &image)?;
             }
         }
-        println!("wrote     {}/{{method}}.exr and .png", dir.display());
+        outln!("wrote     {}/{{method}}.exr and .png", dir.display());
     }
     if let Some(path) = &args.json {
         let report = QualityReport {
@@ -316,7 +325,7 @@ pub fn run(args: &QualityArgs) -> Result<()> {
             methods: results,
         };
         super::write_json(path, &report)?;
-        println!("wrote     {}", path.display());
+        outln!("wrote     {}", path.display());
     }
     Ok(())
 }

@@ -378,7 +378,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             }
         }
     }
-    println!(
+    outln!(
         "scene     {} — {} triangles, BVH {} nodes in {:.1} ms",
         scene.source.display(),
         scene.triangles.len(),
@@ -386,17 +386,17 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         bvh.build_time.as_secs_f64() * 1e3
     );
 
-    println!("adapter   {}", ctx.info);
+    outln!("adapter   {}", ctx.info);
     if embree {
-        println!("tracer    embree (CPU: rtcOccluded16, one 16-ray packet per pixel, all cores)");
+        outln!("tracer    embree (CPU: rtcOccluded16, one 16-ray packet per pixel, all cores)");
     } else if tracer.uses_vector() {
-        println!(
+        outln!(
             "tracer    {tracer}, vector {} ({} leaves)",
             renderer.variant(),
             renderer.leaf_mode()
         );
     } else {
-        println!("tracer    {tracer}");
+        outln!("tracer    {tracer}");
     }
     let gpu_scene = GpuScene::new(&ctx, &scene, &bvh)?;
     let mut settings = FrameSettings::new(width, height);
@@ -451,7 +451,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         let times: Vec<f64> = frames.iter().filter_map(|f| f.timed_ms(name)).collect();
         (!times.is_empty()).then(|| times.iter().sum())
     };
-    println!("{:<9} {}", "primary", gpu_ms(sum_ms("primary")));
+    outln!("{:<9} {}", "primary", gpu_ms(sum_ms("primary")));
     for (i, frame) in frames.iter().enumerate() {
         let light = if several {
             format!(" (light {})", i + 1)
@@ -460,15 +460,15 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         };
         for pass in ["shadow", "shade", "filter"] {
             match frame.timed_ms("shadow-cpu").filter(|_| pass == "shadow") {
-                Some(ms) => println!("{pass:<9} {ms:>9.2} ms CPU (Embree){light}"),
-                None => println!("{pass:<9} {}{light}", gpu_ms(frame.timed_ms(pass))),
+                Some(ms) => outln!("{pass:<9} {ms:>9.2} ms CPU (Embree){light}"),
+                None => outln!("{pass:<9} {}{light}", gpu_ms(frame.timed_ms(pass))),
             }
         }
         if args.refine {
             let refined = frame.refined.iter().filter(|&&r| r).count();
             let share = refined as f64 / hits.max(1.0);
             let rays = 16 * args.refine_sets;
-            println!(
+            outln!(
                 "refine    {}: {refined} px ({:.1} % of those with geometry) traced {rays} rays each, \
                  {:.1} rays per pixel with geometry in all{light}",
                 gpu_ms(frame.timed_ms("refine")),
@@ -483,7 +483,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         Some(ms) if ms > 0.0 => format!("{:.2}", rays / (ms * 1e3)),
         _ => "n/a".to_owned(),
     };
-    println!(
+    outln!(
         "rays      {:.2} M shadow rays ({} px with geometry x {rays_per_pixel}{}), {rate} Mrays/s in the shadow pass{}",
         rays / 1e6,
         hits,
@@ -496,12 +496,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     );
     let dispatches: u32 = frames.iter().map(|f| f.shadow_stats.dispatches).sum();
     let suspensions: u64 = frames.iter().map(|f| f.shadow_stats.suspensions).sum();
-    println!(
+    outln!(
         "frame     {wall:.2} s wall (with readback); {dispatches} shadow dispatches, {suspensions} tile suspensions"
     );
     let fallback: u32 = frames.iter().map(|f| f.primary_fallback_pixels).sum();
     if fallback > 0 {
-        println!(
+        outln!(
             "note      the primary frusta of {fallback} pixels ran out of loop iterations; the per-ray \
              kernel traced the camera rays instead (its time is in the primary line)"
         );
@@ -525,7 +525,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             exposure: args.exposure,
         },
     )?;
-    println!("wrote     {}", args.output.display());
+    outln!("wrote     {}", args.output.display());
     if args.aov == Some(AovArg::Visibility) {
         let aovs = frames.iter().enumerate().flat_map(|(i, frame)| {
             let light = if several {
@@ -546,7 +546,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 pixels: values.iter().map(|v| v[3]).collect(),
             };
             write_float_image(&path, &image)?;
-            println!("wrote     {}", path.display());
+            outln!("wrote     {}", path.display());
         }
     }
     Ok(())
@@ -567,7 +567,7 @@ fn embree_frame(
     report: &mut dyn FnMut(Phase, u64, u64),
 ) -> Result<penumbra::gpu::Frame> {
     let scene = penumbra::embree::EmbreeScene::new(bvh)?;
-    println!("embree    BVH built in {:.1} ms", scene.build_ms);
+    outln!("embree    BVH built in {:.1} ms", scene.build_ms);
     let shadows = |texels: &[_], w, h| scene.frame_masks(&view.light, gpu_scene.origin, texels, w, h);
     renderer.render_with_cpu_shadows(ctx, gpu_scene, view, settings, &shadows, report)
 }

@@ -721,3 +721,32 @@ fn a_view_with_two_lights_renders_the_sum_of_its_lights() {
         "the second light lights {lit_by_second} pixels"
     );
 }
+
+/// A reader that stops reading (`penumbra render | head -3`) is no error: the render still
+/// writes its image, exits 0 and prints nothing about it. Here the pipe is closed before the
+/// first line, so every line meets it.
+#[test]
+fn render_into_a_closed_pipe_still_writes_the_image() {
+    let dir = out_dir("closed-pipe");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_penumbra"))
+        .args(["render", "--size", "32x32", "-o", "shadows.png"])
+        .current_dir(&dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success(),
+        "render into a closed pipe failed ({}):\n{stderr}",
+        out.status
+    );
+    assert!(
+        !stderr.contains("error"),
+        "render into a closed pipe reported:\n{stderr}"
+    );
+    let image = read_hdr_image(&dir.join("shadows.png")).unwrap();
+    assert_eq!((image.width, image.height), (32, 32));
+}

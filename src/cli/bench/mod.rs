@@ -142,7 +142,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     // benched and the table says why ray-query is not among them.
     let ctx = match GpuContext::new(&options(tracers.iter().any(|t| t.0 == Tracer::RayQuery))) {
         Err(e @ Error::RayQueryUnsupported { .. }) => {
-            println!("  ray-query: not benched: {e}");
+            outln!("  ray-query: not benched: {e}");
             tracers.retain(|t| t.0 != Tracer::RayQuery);
             GpuContext::new(&options(false))?
         }
@@ -169,8 +169,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         renderers.push((name, Renderer::new(&ctx, options(false))?, counting));
     }
     let vector = renderers[0].1.variant().to_string();
-    println!("adapter   {}", ctx.info);
-    println!(
+    outln!("adapter   {}", ctx.info);
+    outln!(
         "bench     {} case(s) x leaf sizes {:?}, {}x{}, 16 rays/pixel, {} runs after a warm-up, vector {vector}",
         cases.len(),
         args.leaf_sizes,
@@ -199,9 +199,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             let ray_query_build_ms = gpu_scene.ray_query.as_ref().map(|rq| rq.build_ms);
             if let Some(ms) = ray_query_build_ms {
                 progress!("\r{:100}\r", "");
-                println!(
-                    "  ray-query: BLAS + TLAS built by the driver in {ms:.1} ms wall (not in its times)"
-                );
+                outln!("  ray-query: BLAS + TLAS built by the driver in {ms:.1} ms wall (not in its times)");
             }
             let frame_settings = FrameSettings::new(w, h);
             let mut tracer_results = Vec::new();
@@ -377,7 +375,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     };
     if let Some(path) = &args.json {
         super::write_json(path, &report)?;
-        println!("wrote     {}", path.display());
+        outln!("wrote     {}", path.display());
     }
     Ok(())
 }
@@ -420,7 +418,7 @@ fn bench_embree(
         .map(|(a, b)| ((a ^ b) & 0xffff).count_ones())
         .sum();
     progress!("\r{:100}\r", "");
-    println!(
+    outln!(
         "  embree: BVH build {:.1} ms (not in its times); its masks differ from MFT's in {differing} of {rays} rays",
         embree.build_ms
     );

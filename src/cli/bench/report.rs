@@ -236,8 +236,8 @@ pub(super) fn print_light_total(t: &LightTotal) {
             )
         })
         .collect();
-    println!();
-    println!(
+    outln!();
+    outln!(
         "{} — {}, all {} lights, leaf ≤ {} — {:.2} M shadow rays; shadow (sum of medians): {}",
         t.scene,
         t.view,
@@ -267,8 +267,8 @@ pub(super) fn ratio(a: u64, b: u64) -> f64 {
 
 /// The cases to bench: the scenes named, or the built-ins plus the shared scenes found.
 pub(super) fn print_case(r: &CaseResult) {
-    println!();
-    println!(
+    outln!();
+    outln!(
         "{} — {} — {} tris, leaf ≤ {}, {} nodes, {}x{}, {:.2} M shadow rays, primary {:.1} ms",
         r.scene,
         r.view,
@@ -281,7 +281,7 @@ pub(super) fn print_case(r: &CaseResult) {
         r.primary_ms_median
     );
     let f = &r.frame;
-    println!(
+    outln!(
         "  frame (mft, filtered): primary {:.1} + shadow {:.1} + shade {:.1} + filter {:.1} ms GPU; \
          wall {:.1} ms min, {:.1} ms median (with readback)",
         f.primary_ms_median,
@@ -291,20 +291,30 @@ pub(super) fn print_case(r: &CaseResult) {
         f.wall_ms_min,
         f.wall_ms_median
     );
-    println!(
+    outln!(
         "  refined frame (--refine): refinement {:.1} ms GPU at {} px; wall {:.1} ms median",
-        f.refine_ms_median, f.refined_pixels, f.refined_wall_ms_median
+        f.refine_ms_median,
+        f.refined_pixels,
+        f.refined_wall_ms_median
     );
-    println!(
+    outln!(
         "  {:<8} {:>10} {:>10} {:>8} {:>9} {:>11} {:>11} {:>11} {:>11}",
-        "tracer", "min ms", "median ms", "Mrays/s", "MFT is", "tris", "+culling", "AABB tests", "tri tests"
+        "tracer",
+        "min ms",
+        "median ms",
+        "Mrays/s",
+        "MFT is",
+        "tris",
+        "+culling",
+        "AABB tests",
+        "tri tests"
     );
     for t in &r.tracers {
         let c = |f: fn(&Counters) -> u64| {
             t.counters
                 .map_or("-".to_owned(), |c| format!("{:.0}K", f(&c) as f64 / 1e3))
         };
-        println!(
+        outln!(
             "  {:<8} {:>10.1} {:>10.1} {:>8.2} {:>8.2}x {:>11} {:>11} {:>11} {:>11}",
             t.tracer,
             t.shadow_ms_min,
@@ -317,15 +327,24 @@ pub(super) fn print_case(r: &CaseResult) {
             c(|c| c.triangle_tests),
         );
     }
-    println!(
+    outln!(
         "  {:<8} {:>10} {:>10} {:>8} {:>9} {:>11} {:>11} {:>11} {:>11}",
-        "primary", "min ms", "median ms", "", "MFT is", "tris", "+culling", "AABB tests", "tri tests"
+        "primary",
+        "min ms",
+        "median ms",
+        "",
+        "MFT is",
+        "tris",
+        "+culling",
+        "AABB tests",
+        "tri tests"
     );
     for p in &r.primary {
         if p.ran_out_pixels > 0 {
-            println!(
+            outln!(
                 "  {:<8} the vectors of {} pixels ran out of loop iterations at this size (not timed)",
-                p.tracer, p.ran_out_pixels
+                p.tracer,
+                p.ran_out_pixels
             );
             continue;
         }
@@ -335,7 +354,7 @@ pub(super) fn print_case(r: &CaseResult) {
             p.counters
                 .map_or("-".to_owned(), |c| format!("{:.0}K", f(&c) as f64 / scale / 1e3))
         };
-        println!(
+        outln!(
             "  {:<8} {:>10.1} {:>10.1} {:>8} {:>8.2}x {:>11} {:>11} {:>11} {:>11}",
             p.tracer,
             p.primary_ms_min,
@@ -348,9 +367,9 @@ pub(super) fn print_case(r: &CaseResult) {
             c(|c| c.triangle_tests),
         );
     }
-    println!("  (per-ray primary counts shown /16, as 16-wide equivalents)");
+    outln!("  (per-ray primary counts shown /16, as 16-wide equivalents)");
     if let Some(a) = &r.animation {
-        println!(
+        outln!(
             "  moving instance {} ({} tris), {} frames: refit {} x {:.3} ms, rebuild {} x {:.2} ms, \
              upload {:.3} ms and {:.0} KB per frame (CPU)",
             a.instance,
@@ -365,9 +384,12 @@ pub(super) fn print_case(r: &CaseResult) {
         );
     }
     if let Some(red) = &r.reductions_vs_packet {
-        println!(
+        outln!(
             "  packet/MFT: tris {:.2}x, +culling {:.2}x, AABB tests {:.2}x, triangle tests {:.2}x",
-            red.triangles_accessed, red.triangles_after_culling, red.box_tests, red.triangle_tests
+            red.triangles_accessed,
+            red.triangles_after_culling,
+            red.box_tests,
+            red.triangle_tests
         );
     }
 }
