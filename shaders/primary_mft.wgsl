@@ -228,11 +228,63 @@ fn test_rays(tri: BvhTriangle, ix: u32) {
         max(max(max(f_t[8], f_t[9]), max(f_t[10], f_t[11])), max(max(f_t[12], f_t[13]), max(f_t[14], f_t[15]))));
 }
 
+// Ray k's texel. The rays' arrays are read with constant indices only (selects), so that
+// they stay registers; the texel's code, with its loads, then exists once, in main's loop
+// over k: 16 unrolled copies made lavapipe 25.0's compile of this kernel several times
+// slower (LLVM's coroutine split).
 fn write_texel(k: u32) {
+    var tri = f_tri[0];
+    var best = f_best[0];
+    var dir = f_dirs[0];
+    tri = select(tri, f_tri[1], k == 1u);
+    best = select(best, f_best[1], k == 1u);
+    dir = select(dir, f_dirs[1], k == 1u);
+    tri = select(tri, f_tri[2], k == 2u);
+    best = select(best, f_best[2], k == 2u);
+    dir = select(dir, f_dirs[2], k == 2u);
+    tri = select(tri, f_tri[3], k == 3u);
+    best = select(best, f_best[3], k == 3u);
+    dir = select(dir, f_dirs[3], k == 3u);
+    tri = select(tri, f_tri[4], k == 4u);
+    best = select(best, f_best[4], k == 4u);
+    dir = select(dir, f_dirs[4], k == 4u);
+    tri = select(tri, f_tri[5], k == 5u);
+    best = select(best, f_best[5], k == 5u);
+    dir = select(dir, f_dirs[5], k == 5u);
+    tri = select(tri, f_tri[6], k == 6u);
+    best = select(best, f_best[6], k == 6u);
+    dir = select(dir, f_dirs[6], k == 6u);
+    tri = select(tri, f_tri[7], k == 7u);
+    best = select(best, f_best[7], k == 7u);
+    dir = select(dir, f_dirs[7], k == 7u);
+    tri = select(tri, f_tri[8], k == 8u);
+    best = select(best, f_best[8], k == 8u);
+    dir = select(dir, f_dirs[8], k == 8u);
+    tri = select(tri, f_tri[9], k == 9u);
+    best = select(best, f_best[9], k == 9u);
+    dir = select(dir, f_dirs[9], k == 9u);
+    tri = select(tri, f_tri[10], k == 10u);
+    best = select(best, f_best[10], k == 10u);
+    dir = select(dir, f_dirs[10], k == 10u);
+    tri = select(tri, f_tri[11], k == 11u);
+    best = select(best, f_best[11], k == 11u);
+    dir = select(dir, f_dirs[11], k == 11u);
+    tri = select(tri, f_tri[12], k == 12u);
+    best = select(best, f_best[12], k == 12u);
+    dir = select(dir, f_dirs[12], k == 12u);
+    tri = select(tri, f_tri[13], k == 13u);
+    best = select(best, f_best[13], k == 13u);
+    dir = select(dir, f_dirs[13], k == 13u);
+    tri = select(tri, f_tri[14], k == 14u);
+    best = select(best, f_best[14], k == 14u);
+    dir = select(dir, f_dirs[14], k == 14u);
+    tri = select(tri, f_tri[15], k == 15u);
+    best = select(best, f_best[15], k == 15u);
+    dir = select(dir, f_dirs[15], k == 15u);
     let x = f_x0 + (k & 3u);
     let y = f_y0 + (k >> 2u);
     if x < camera.width && y < camera.height {
-        gbuffer[y * camera.width + x] = gbuffer_texel(f_tri[k], f_best[k], f_dirs[k]);
+        gbuffer[y * camera.width + x] = gbuffer_texel(tri, best, dir);
     }
 }
 
@@ -391,20 +443,7 @@ fn main(ids: Vec16Ids) {
         atomicAdd(&status[WORD_TRIANGLES_AFTER_CULLING], n_after_culling);
         atomicAdd(&status[WORD_TRIANGLE_TESTS], n_triangle_tests);
     }
-    write_texel(0u);
-    write_texel(1u);
-    write_texel(2u);
-    write_texel(3u);
-    write_texel(4u);
-    write_texel(5u);
-    write_texel(6u);
-    write_texel(7u);
-    write_texel(8u);
-    write_texel(9u);
-    write_texel(10u);
-    write_texel(11u);
-    write_texel(12u);
-    write_texel(13u);
-    write_texel(14u);
-    write_texel(15u);
+    for (var k = 0u; k < 16u; k++) {
+        write_texel(k);
+    }
 }
