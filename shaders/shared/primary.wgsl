@@ -14,9 +14,10 @@
 @group(0) @binding(7) var<storage, read> textures: array<GpuTexture>;
 @group(0) @binding(8) var<storage, read> texels: array<vec4<f32>>;
 
-// Below lavapipe's 65,535 loop iterations per invocation (all loops counted; the
-// kernels have no other loop). Tests lower it to check the overflow report, and raise
-// it past the limit to check that a loop the driver ends is reported (WORD_LOOP_CUT).
+// Below lavapipe's 65,535 loop iterations per invocation (all loops counted; besides the
+// traversal loop there is only primary_mft's 16-iteration texel loop after it). Tests lower
+// it to check the overflow report, and raise it past the limit to check that a loop the
+// driver ends is reported (WORD_LOOP_CUT).
 override ITERATION_BUDGET: u32 = 60000u;
 
 // The camera ray direction through the centre of pixel (x, y); twin of frame::camera_ray.
