@@ -74,9 +74,10 @@ pub fn ray_query_ctx() -> Result<&'static GpuContext, &'static str> {
 }
 
 /// Set to a comma-separated list of variant names (`workgroup`, `workgroup4`, `subgroup`,
-/// `subgroup-reduce`) to test only those of [`variants`]. `.ci/run` tests the workgroup
-/// variants at 8 lanes, where lavapipe runs them, and leaves them out at 16 lanes on Mesa 25,
-/// whose compiles of them there take most of the CI's time.
+/// `subgroup-reduce`) to test only those of [`variants`]. `.ci/run` tests every variant at
+/// 8 lanes on both drivers and at 16 lanes on Mesa 22.3, and only the variant each remaining
+/// run is for elsewhere (`subgroup-reduce` at 16 lanes on Mesa 25.0, whose cold compiles were
+/// most of the CI's time; `subgroup` at 32 lanes).
 pub const TEST_VARIANTS_ENV: &str = "PENUMBRA_TEST_VARIANTS";
 
 /// The variants this adapter can run: always workgroup (one vector and four per workgroup),
