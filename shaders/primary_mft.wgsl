@@ -180,10 +180,10 @@ struct EyeTriangle {
     q: vec3<f32>,
 }
 
-// Ray k against triangle `ix`: exactly the per-ray kernel's test and update,
-// branch-free (selects instead of its early returns: the same result, and 16
-// unrolled copies without a branch each).
-fn test_ray(k: u32, et: EyeTriangle, tri: BvhTriangle, ix: u32) {
+// Ray k against triangle `ix` (its alpha test's record `a`, read when `alpha_tested`):
+// exactly the per-ray kernel's test and update, with selects instead of its early returns
+// (the same result; of 16 unrolled copies only the alpha test's texel load branches).
+fn test_ray(k: u32, et: EyeTriangle, alpha_tested: bool, a: SurfaceAlpha, ix: u32) {
     let dir = f_dirs[k];
     let p = cross(dir, et.e2);
     let det = dot(et.e1, p);
@@ -195,7 +195,11 @@ fn test_ray(k: u32, et: EyeTriangle, tri: BvhTriangle, ix: u32) {
     let hit = (det != 0.0) & !((u < 0.0) | (u > 1.0)) & !((v < 0.0) | (u + v > 1.0))
         & (t > 0.0) & (t < f_t[k]);
     let h = vec3<f32>(t, u, v);
-    let keep = hit && !passes_alpha(tri, ix, h);
+    var passes = false;
+    if alpha_tested & hit {
+        passes = surface_passes(a, h);
+    }
+    let keep = hit & !passes;
     f_t[k] = select(f_t[k], t, keep);
     f_best[k] = select(f_best[k], h, keep);
     f_tri[k] = select(f_tri[k], ix, keep);
@@ -208,22 +212,31 @@ fn test_rays(tri: BvhTriangle, ix: u32) {
     et.e2 = tri.v2 - tri.v0;
     et.s = camera.eye - tri.v0;
     et.q = cross(et.s, et.e1);
-    test_ray(0u, et, tri, ix);
-    test_ray(1u, et, tri, ix);
-    test_ray(2u, et, tri, ix);
-    test_ray(3u, et, tri, ix);
-    test_ray(4u, et, tri, ix);
-    test_ray(5u, et, tri, ix);
-    test_ray(6u, et, tri, ix);
-    test_ray(7u, et, tri, ix);
-    test_ray(8u, et, tri, ix);
-    test_ray(9u, et, tri, ix);
-    test_ray(10u, et, tri, ix);
-    test_ray(11u, et, tri, ix);
-    test_ray(12u, et, tri, ix);
-    test_ray(13u, et, tri, ix);
-    test_ray(14u, et, tri, ix);
-    test_ray(15u, et, tri, ix);
+    // The alpha test's record read once per triangle, each ray's test one texel load: 16
+    // copies of the whole test, each loading the record behind two branches, made Mesa 25
+    // lavapipe's first compile of this kernel take over a minute (LLVM's coroutine split).
+    // (Without the rays' branch, the load for every ray: faster on Mesa 22.3, slower on 25.0.)
+    let alpha_tested = ALPHA_TEST && tri.alpha != ALPHA_OPAQUE;
+    var a = SurfaceAlpha(vec2<f32>(0.0), vec2<f32>(0.0), vec2<f32>(0.0), 1.0, 0.0, false, 0u, 1u, 1u);
+    if alpha_tested {
+        a = surface_alpha(ix);
+    }
+    test_ray(0u, et, alpha_tested, a, ix);
+    test_ray(1u, et, alpha_tested, a, ix);
+    test_ray(2u, et, alpha_tested, a, ix);
+    test_ray(3u, et, alpha_tested, a, ix);
+    test_ray(4u, et, alpha_tested, a, ix);
+    test_ray(5u, et, alpha_tested, a, ix);
+    test_ray(6u, et, alpha_tested, a, ix);
+    test_ray(7u, et, alpha_tested, a, ix);
+    test_ray(8u, et, alpha_tested, a, ix);
+    test_ray(9u, et, alpha_tested, a, ix);
+    test_ray(10u, et, alpha_tested, a, ix);
+    test_ray(11u, et, alpha_tested, a, ix);
+    test_ray(12u, et, alpha_tested, a, ix);
+    test_ray(13u, et, alpha_tested, a, ix);
+    test_ray(14u, et, alpha_tested, a, ix);
+    test_ray(15u, et, alpha_tested, a, ix);
     f_t_max = max(max(max(max(f_t[0], f_t[1]), max(f_t[2], f_t[3])), max(max(f_t[4], f_t[5]), max(f_t[6], f_t[7]))),
         max(max(max(f_t[8], f_t[9]), max(f_t[10], f_t[11])), max(max(f_t[12], f_t[13]), max(f_t[14], f_t[15]))));
 }

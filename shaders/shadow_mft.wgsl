@@ -370,14 +370,18 @@ fn test_triangle(tri: BvhTriangle) -> u32 {
         | ray_bit(8u, e) | ray_bit(9u, e) | ray_bit(10u, e) | ray_bit(11u, e)
         | ray_bit(12u, e) | ray_bit(13u, e) | ray_bit(14u, e) | ray_bit(15u, e);
     if ALPHA_TEST && tri.alpha != ALPHA_OPAQUE && bits != 0u {
-        bits &= ~(passed_bit(0u, tri.alpha, e, bits) | passed_bit(1u, tri.alpha, e, bits)
-            | passed_bit(2u, tri.alpha, e, bits) | passed_bit(3u, tri.alpha, e, bits)
-            | passed_bit(4u, tri.alpha, e, bits) | passed_bit(5u, tri.alpha, e, bits)
-            | passed_bit(6u, tri.alpha, e, bits) | passed_bit(7u, tri.alpha, e, bits)
-            | passed_bit(8u, tri.alpha, e, bits) | passed_bit(9u, tri.alpha, e, bits)
-            | passed_bit(10u, tri.alpha, e, bits) | passed_bit(11u, tri.alpha, e, bits)
-            | passed_bit(12u, tri.alpha, e, bits) | passed_bit(13u, tri.alpha, e, bits)
-            | passed_bit(14u, tri.alpha, e, bits) | passed_bit(15u, tri.alpha, e, bits));
+        // Branch-free per ray, the record read once: 16 copies of the whole test, each
+        // loading the record behind two branches, made Mesa 25 lavapipe's first compile of
+        // this kernel take over a minute (LLVM's coroutine split) and ran 1.6-2x slower.
+        let r = alpha_record(tri.alpha);
+        bits &= ~(passed_bit(0u, r, e, bits) | passed_bit(1u, r, e, bits)
+            | passed_bit(2u, r, e, bits) | passed_bit(3u, r, e, bits)
+            | passed_bit(4u, r, e, bits) | passed_bit(5u, r, e, bits)
+            | passed_bit(6u, r, e, bits) | passed_bit(7u, r, e, bits)
+            | passed_bit(8u, r, e, bits) | passed_bit(9u, r, e, bits)
+            | passed_bit(10u, r, e, bits) | passed_bit(11u, r, e, bits)
+            | passed_bit(12u, r, e, bits) | passed_bit(13u, r, e, bits)
+            | passed_bit(14u, r, e, bits) | passed_bit(15u, r, e, bits));
     }
     return TESTED | bits;
 }
@@ -390,12 +394,11 @@ fn st_weights(e: EdgeFunctions, st: vec2<f32>) -> vec3<f32> {
     return vec3<f32>(v.y, v.z, v.x) * inv;
 }
 
-// Bit j if ray j is in `bits` (it hits the alpha-tested triangle `record`) but passes it.
-fn passed_bit(j: u32, record: u32, e: EdgeFunctions, bits: u32) -> u32 {
-    if (bits & (1u << j)) != 0u && alpha_passes(record, st_weights(e, f_st[j])) {
-        return 1u << j;
-    }
-    return 0u;
+// Bit j if ray j is in `bits` (it hits the alpha-tested triangle of record `r`) but passes
+// it. The mask is read for every ray, hit or not (a clamped texel of the mask).
+fn passed_bit(j: u32, r: AlphaRecord, e: EdgeFunctions, bits: u32) -> u32 {
+    let passes = record_passes(r, st_weights(e, f_st[j]));
+    return select(0u, 1u << j, ((bits & (1u << j)) != 0u) & passes);
 }
 
 // Transposed leaves: whether ray g_lane of frustum f (a lane of this vector)

@@ -36,6 +36,40 @@ fn albedo(material: GpuMaterial, uv: vec2<f32>) -> vec3<f32> {
     return material.base_color * texels[t.offset + texel_index(t.width, t.height, uv)].xyz;
 }
 
+// What the camera rays' alpha test needs of an alpha-tested triangle, read once for all
+// the rays of a frustum: its texture coordinates, its material's alpha factor and cutoff,
+// and where the base colour texture's texels are (`textured` false: none).
+struct SurfaceAlpha {
+    uv0: vec2<f32>,
+    uv1: vec2<f32>,
+    uv2: vec2<f32>,
+    factor: f32,
+    cutoff: f32,
+    textured: bool,
+    offset: u32,
+    width: u32,
+    height: u32,
+}
+
+// The SurfaceAlpha of triangle `ix`.
+fn surface_alpha(ix: u32) -> SurfaceAlpha {
+    let sh = shading[ix];
+    let m = materials[sh.material];
+    let textured = m.texture < arrayLength(&textures);
+    let t = textures[select(0u, m.texture, textured)];
+    return SurfaceAlpha(sh.uv0, sh.uv1, sh.uv2, m.alpha_factor, m.alpha_cutoff, textured,
+        t.offset, max(t.width, 1u), max(t.height, 1u));
+}
+
+// Whether a camera ray passes the surface `a` at its hit `h` = (t, u, v): where texel
+// alpha × factor is below the cutoff. Branch-free; without a texture it reads texel 0 and
+// ignores it (every storage buffer holds 16 bytes at least: buffers::MIN_BUFFER_BYTES).
+fn surface_passes(a: SurfaceAlpha, h: vec3<f32>) -> bool {
+    let uv = a.uv0 * (1.0 - h.y - h.z) + a.uv1 * h.y + a.uv2 * h.z;
+    let texel = texels[select(0u, a.offset + texel_index(a.width, a.height, uv), a.textured)].w;
+    return a.factor * select(1.0, texel, a.textured) < a.cutoff;
+}
+
 // Whether a camera ray passes triangle `ix` (`tri`) at its hit `h` = (t, u, v): only an
 // alpha-tested triangle's surface can be absent, where texel alpha × factor is below the
 // cutoff. The texels and materials are the shading's; the shadow kernels' bits
@@ -44,15 +78,7 @@ fn passes_alpha(tri: BvhTriangle, ix: u32, h: vec3<f32>) -> bool {
     if !ALPHA_TEST || tri.alpha == ALPHA_OPAQUE {
         return false;
     }
-    let sh = shading[ix];
-    let m = materials[sh.material];
-    var alpha = m.alpha_factor;
-    if m.texture < arrayLength(&textures) {
-        let t = textures[m.texture];
-        let uv = sh.uv0 * (1.0 - h.y - h.z) + sh.uv1 * h.y + sh.uv2 * h.z;
-        alpha *= texels[t.offset + texel_index(t.width, t.height, uv)].w;
-    }
-    return alpha < m.alpha_cutoff;
+    return surface_passes(surface_alpha(ix), h);
 }
 
 // The texel of the camera ray from the eye along `dir` whose closest hit is
