@@ -71,13 +71,18 @@ pub fn point_set(i: usize) -> usize {
     x + 4 * y
 }
 
-/// Index into [`hammersley_256`] of sample `j` of set `k`: the set's points in
-/// increasing index.
-pub fn sample_index(set: usize, j: usize) -> usize {
-    (0..SAMPLES)
-        .filter(|&i| point_set(i) == set)
-        .nth(j)
-        .expect("every set holds SAMPLES_PER_SET points (tested)")
+/// Indices into [`hammersley_256`] of every set's points, in increasing index:
+/// `set_indices()[k][j]` is sample `j` of set `k`. One pass over the points.
+pub fn set_indices() -> [[usize; SAMPLES_PER_SET]; SETS] {
+    let mut sets = [[0; SAMPLES_PER_SET]; SETS];
+    let mut filled = [0; SETS];
+    for i in 0..SAMPLES {
+        let k = point_set(i);
+        // Every set holds exactly SAMPLES_PER_SET points (tested): an overflow is a bug.
+        sets[k][filled[k]] = i;
+        filled[k] += 1;
+    }
+    sets
 }
 
 /// The sample set a pixel uses: `(x mod 4) + 4·(y mod 4)`.
@@ -88,7 +93,7 @@ pub fn pixel_set(x: u32, y: u32) -> usize {
 /// The unit-square points of every set: `sets()[k][j]` is sample `j` of set `k`.
 pub fn sets() -> [[Vec2; SAMPLES_PER_SET]; SETS] {
     let points = hammersley_256();
-    std::array::from_fn(|k| std::array::from_fn(|j| points[sample_index(k, j)]))
+    set_indices().map(|set| set.map(|i| points[i]))
 }
 
 /// World-space light sample points in set order (`[k·16 + j]` = sample `j` of
@@ -169,9 +174,8 @@ mod tests {
     #[test]
     fn sets_partition_the_points() {
         let mut seen = [false; SAMPLES];
-        for k in 0..SETS {
-            for j in 0..SAMPLES_PER_SET {
-                let i = sample_index(k, j);
+        for (k, set) in set_indices().iter().enumerate() {
+            for &i in set {
                 assert_eq!(point_set(i), k);
                 assert!(!seen[i], "point {i} in two sets");
                 seen[i] = true;
