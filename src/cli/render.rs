@@ -552,8 +552,6 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
-/// A pass's GPU time for the report: milliseconds, or `n/a` where the adapter has no
-/// timestamp queries (a 0 would read as a measurement).
 /// The frame with Embree's masks (`--tracer embree`): Embree's BVH is built from the same
 /// triangles; the G-buffer the renderer hands over is relative to the GPU scene's origin.
 #[cfg(feature = "embree")]
@@ -586,6 +584,8 @@ fn embree_frame(
     unreachable!("parse_tracer refuses embree without the feature")
 }
 
+/// A pass's GPU time for the report: milliseconds, or `n/a` where the adapter has no
+/// timestamp queries (a 0 would read as a measurement).
 fn gpu_ms(ms: Option<f64>) -> String {
     match ms {
         Some(ms) => format!("{ms:>9.2} ms GPU"),
