@@ -147,6 +147,11 @@ unsafe extern "C" fn alpha_filter(args: *const RtcFilterFunctionNArguments) {
     }
 }
 
+/// The environment variable whose value [`EmbreeScene::new`] passes to `rtcNewDevice` as
+/// Embree's device config (empty when unset: Embree's defaults, the best ISA of the CPU
+/// and all its cores), e.g. `isa=avx2` to run the AVX2 kernels on an AVX-512 machine.
+pub const EMBREE_CONFIG_VAR: &str = "PENUMBRA_EMBREE_CONFIG";
+
 /// An Embree device and a committed scene of a BVH's triangles (the same corners, in the
 /// same leaf order, as the GPU reads).
 pub struct EmbreeScene {
@@ -173,12 +178,23 @@ impl EmbreeScene {
         if n == 0 {
             return Err(Error::invalid("Embree scene", "the scene has no triangles"));
         }
-        // SAFETY: every pointer passed is either null (the default device config) or
-        // returned by Embree for exactly the size written; errors are checked below.
+        // Embree's device config (e.g. `isa=avx2,threads=2`), so that it can run with the
+        // instruction set or the threads of another machine. Unset or not Unicode: none.
+        let config = std::env::var(EMBREE_CONFIG_VAR).unwrap_or_default();
+        let config = std::ffi::CString::new(config)
+            .map_err(|_| Error::invalid(EMBREE_CONFIG_VAR, "holds a NUL byte"))?;
+        // SAFETY: every pointer passed is either a NUL-terminated string that outlives the
+        // call or returned by Embree for exactly the size written; errors are checked below.
         unsafe {
-            let device = rtcNewDevice(std::ptr::null());
+            let device = rtcNewDevice(config.as_ptr());
             if device.is_null() {
-                return Err(Error::invalid("Embree", "rtcNewDevice failed"));
+                let message = match config.to_str() {
+                    Ok("") | Err(_) => "rtcNewDevice failed".to_string(),
+                    Ok(c) => {
+                        format!("rtcNewDevice failed with the device config {c:?} of {EMBREE_CONFIG_VAR}")
+                    }
+                };
+                return Err(Error::invalid("Embree", message));
             }
             let scene = rtcNewScene(device);
             let alpha = (bvh.alpha.triangles > 0).then(|| {

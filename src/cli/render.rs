@@ -388,7 +388,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 
     outln!("adapter   {}", ctx.info);
     if embree {
-        outln!("tracer    embree (CPU: rtcOccluded16, one 16-ray packet per pixel, all cores)");
+        outln!("tracer    embree (CPU: rtcOccluded16, one 16-ray packet per pixel)");
     } else if tracer.uses_vector() {
         outln!(
             "tracer    {tracer}, vector {} ({} leaves)",
@@ -566,6 +566,12 @@ fn embree_frame(
 ) -> Result<penumbra::gpu::Frame> {
     let scene = penumbra::embree::EmbreeScene::new(bvh)?;
     outln!("embree    BVH built in {:.1} ms", scene.build_ms);
+    if let Ok(config) = std::env::var(penumbra::embree::EMBREE_CONFIG_VAR) {
+        outln!(
+            "embree    device config {config:?} ({})",
+            penumbra::embree::EMBREE_CONFIG_VAR
+        );
+    }
     let shadows = |texels: &[_], w, h| scene.frame_masks(&view.light, gpu_scene.origin, texels, w, h);
     renderer.render_with_cpu_shadows(ctx, gpu_scene, view, settings, &shadows, report)
 }
