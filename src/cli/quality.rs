@@ -14,6 +14,7 @@ use penumbra::contract::layout::MASK_SKY;
 use penumbra::gpu::{FrameSettings, GpuContext, GpuOptions, GpuScene, Renderer, RendererOptions, Tracer};
 use penumbra::output::{FloatImage, write_float_image};
 use penumbra::quality::error_regions::{Region, RegionError, classify_pixels, error_by_region};
+use penumbra::quality::filter_windows::{WindowClassError, filter_window_errors};
 use penumbra::quality::metrics::ImageMetrics;
 use penumbra::reference::exact::{ExactImageOptions, exact_visibility_image_with};
 use penumbra::{Error, Result};
@@ -99,6 +100,8 @@ struct QualityReport {
     pixels: usize,
     exact_cpu_seconds: f64,
     methods: Vec<MethodResult>,
+    /// The filtered 16-ray image's error by what the filter did to each pixel's window.
+    filter_windows: Vec<WindowClassError>,
 }
 
 /// Prints, per region, its share of the pixels, then per method the region's
@@ -118,6 +121,38 @@ fn print_regions(results: &[MethodResult]) {
             out!(" {:>9.1}% ({:.4})", 100.0 * e.error_share, e.rmse);
         }
         outln!();
+    }
+}
+
+/// Prints the filtered 16-ray image's error by window class (see
+/// [`penumbra::quality::filter_windows`]), beside reference-64's over the same pixels.
+fn print_filter_windows(windows: &[WindowClassError]) {
+    outln!(
+        "filter windows (mft-16-filtered; RMSE = window bias + sampling, the window's rays on average; reference-64 on the same pixels)"
+    );
+    outln!(
+        "  {:<18} {:>7} {:>7} {:>9} {:>9} {:>9} {:>6} {:>9}",
+        "window",
+        "pixels",
+        "error",
+        "RMSE",
+        "bias",
+        "sampling",
+        "rays",
+        "ref. 64"
+    );
+    for c in windows {
+        outln!(
+            "  {:<18} {:>6.1}% {:>6.1}% {:>9.4} {:>9.4} {:>9.4} {:>6.0} {:>9.4}",
+            c.class,
+            100.0 * c.pixel_share,
+            100.0 * c.error_share,
+            c.rmse,
+            c.bias_rmse,
+            c.sampling_rmse,
+            c.mean_rays,
+            c.reference_rmse
+        );
     }
 }
 
@@ -293,6 +328,25 @@ pub fn run(args: &QualityArgs) -> Result<()> {
         });
     }
     print_regions(&results);
+    let values_of = |name: &str| {
+        &methods
+            .iter()
+            .find(|(n, ..)| n == name)
+            .expect("every method above is rendered")
+            .1
+    };
+    let depth: Vec<f32> = gbuffer.iter().map(|t| t.depth).collect();
+    let normal: Vec<[f32; 3]> = gbuffer.iter().map(|t| t.normal.to_array()).collect();
+    let windows = filter_window_errors(
+        &FilterParams::with_tolerances(w, h, args.depth_tolerance, args.normal_tolerance),
+        values_of("mft-16"),
+        &depth,
+        &normal,
+        &exact,
+        values_of("reference-64"),
+        &hit,
+    );
+    print_filter_windows(&windows);
     if let Some(dir) = &args.images {
         std::fs::create_dir_all(dir).map_err(|source| Error::Io {
             path: dir.clone(),
@@ -323,6 +377,7 @@ pub fn run(args: &QualityArgs) -> Result<()> {
             pixels: exact_hit.len(),
             exact_cpu_seconds: exact_seconds,
             methods: results,
+            filter_windows: windows,
         };
         super::write_json(path, &report)?;
         outln!("wrote     {}", path.display());
