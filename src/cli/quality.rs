@@ -293,13 +293,9 @@ pub fn run(args: &QualityArgs) -> Result<()> {
         "max |e|",
         "PSNR dB"
     );
-    let mut regions = classify_pixels(
-        &gbuffer,
-        &exact,
-        w,
-        h,
-        &FilterParams::with_tolerances(w, h, args.depth_tolerance, args.normal_tolerance),
-    );
+    // The filter's tolerances, for the regions and the window classes.
+    let filter_params = FilterParams::with_tolerances(w, h, args.depth_tolerance, args.normal_tolerance);
+    let mut regions = classify_pixels(&gbuffer, &exact, w, h, &filter_params);
     // The same pixels as the metrics above.
     for (region, hit) in regions.iter_mut().zip(&hit) {
         if !hit {
@@ -338,7 +334,7 @@ pub fn run(args: &QualityArgs) -> Result<()> {
     let depth: Vec<f32> = gbuffer.iter().map(|t| t.depth).collect();
     let normal: Vec<[f32; 3]> = gbuffer.iter().map(|t| t.normal.to_array()).collect();
     let windows = filter_window_errors(
-        &FilterParams::with_tolerances(w, h, args.depth_tolerance, args.normal_tolerance),
+        &filter_params,
         values_of("mft-16"),
         &depth,
         &normal,
