@@ -100,6 +100,31 @@ fn quality_reports_every_method_on_the_generated_scenes() {
             );
         }
         assert!(stdout.contains("error by region"), "{stdout}");
+        // The filtered image's error by window class: three classes whose pixel and error
+        // shares sum to 1, recombining to the filtered method's RMSE (the classes take the
+        // filter twin's mean in f64, the kernel sums in f32: equal to 1e-6 relative) and to
+        // reference-64's over the same pixels.
+        let windows = report["filter_windows"].as_array().unwrap();
+        assert_eq!(windows.len(), 3, "{scene}: {windows:?}");
+        let share = |key: &str| windows.iter().map(|c| c[key].as_f64().unwrap()).sum::<f64>();
+        assert!((share("pixel_share") - 1.0).abs() < 1e-9, "{scene}: {windows:?}");
+        assert!((share("error_share") - 1.0).abs() < 1e-9, "{scene}: {windows:?}");
+        let recombined = |key: &str| {
+            windows
+                .iter()
+                .map(|c| c["pixel_share"].as_f64().unwrap() * c[key].as_f64().unwrap().powi(2))
+                .sum::<f64>()
+                .sqrt()
+        };
+        for (key, i) in [("rmse", 0), ("reference_rmse", 5)] {
+            assert!(
+                (recombined(key) - rmse(i)).abs() < 1e-6 * rmse(i).max(1e-3),
+                "{scene}: window classes recombine to {key} {} not {}",
+                recombined(key),
+                rmse(i)
+            );
+        }
+        assert!(stdout.contains("filter windows"), "{stdout}");
         // Every method's image and the exact one, as EXR and as a 16-bit PNG holding the
         // same values to the PNG's step (rounded: at most half of 1/65535 away).
         for name in names.iter().copied().chain(["exact"]) {
