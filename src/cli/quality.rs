@@ -17,6 +17,7 @@ use penumbra::quality::error_regions::{Region, RegionError, classify_pixels, err
 use penumbra::quality::filter_windows::{WindowClassError, filter_window_errors};
 use penumbra::quality::metrics::ImageMetrics;
 use penumbra::reference::exact::{ExactImageOptions, exact_visibility_image_with};
+use penumbra::reference::filter::depths_and_normals;
 use penumbra::{Error, Result};
 use serde::Serialize;
 
@@ -331,8 +332,7 @@ pub fn run(args: &QualityArgs) -> Result<()> {
             .expect("every method above is rendered")
             .1
     };
-    let depth: Vec<f32> = gbuffer.iter().map(|t| t.depth).collect();
-    let normal: Vec<[f32; 3]> = gbuffer.iter().map(|t| t.normal.to_array()).collect();
+    let (depth, normal) = depths_and_normals(&gbuffer);
     let windows = filter_window_errors(
         &filter_params,
         values_of("mft-16"),

@@ -10,7 +10,7 @@
 //! filtered error pixel by pixel.
 
 use crate::contract::filter::{FULL_WINDOW, FilterParams};
-use crate::reference::filter::paired_taps;
+use crate::reference::filter::{paired_taps, tap_weight};
 
 /// What the filter's tests did to a pixel's window.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -63,13 +63,6 @@ pub struct WindowClassError {
     pub reference_rmse: f64,
 }
 
-/// The weight of tap `k` (bit `(dy + 2)·5 + (dx + 2)`): the outer ring of the 5×5 window
-/// at half weight, its corners a quarter, as the filter weighs it.
-fn tap_weight(k: u32) -> f64 {
-    let ring = |d: i32| if d.abs() == 2 { 0.5 } else { 1.0 };
-    ring(k as i32 / 5 - 2) * ring(k as i32 % 5 - 2)
-}
-
 /// The weighted mean of `values` over the taps `bits` of `(x, y)`'s window.
 fn mean_over_taps(values: &[f32], width: usize, x: usize, y: usize, bits: u32) -> (f64, f64) {
     let (mut sum, mut weight) = (0.0f64, 0.0f64);
@@ -77,8 +70,9 @@ fn mean_over_taps(values: &[f32], width: usize, x: usize, y: usize, bits: u32) -
         if bits & (1 << k) != 0 {
             let nx = (x as i32 + k as i32 % 5 - 2) as usize;
             let ny = (y as i32 + k as i32 / 5 - 2) as usize;
-            sum += tap_weight(k) * f64::from(values[ny * width + nx]);
-            weight += tap_weight(k);
+            let w = f64::from(tap_weight(k));
+            sum += w * f64::from(values[ny * width + nx]);
+            weight += w;
         }
     }
     (sum / weight, weight)

@@ -36,6 +36,7 @@
 //! keep their inputs away from the thresholds.
 
 use crate::contract::filter::FilterParams;
+use crate::contract::layout::GBufferTexel;
 
 /// Filters a whole image: [`filter_pixel`] for every pixel, row-major, top row first.
 ///
@@ -115,7 +116,6 @@ pub fn filter_pixel(
     // counts when both taps are inside and similar — the taps of [`paired_taps`]. The
     // sum, as the kernel's: the centre, then pair by pair, k increasing; component
     // by component, as its vec4 arithmetic. i32 like the kernel.
-    let weight = |d: i32| if d.abs() == 2 { 0.5f32 } else { 1.0 };
     let mut sum = v_c;
     let mut weight_sum = 1.0f32;
     for k in 0i32..12 {
@@ -132,7 +132,7 @@ pub fn filter_pixel(
         if !(similar(a) && similar(b)) {
             continue;
         }
-        let w = weight(dy) * weight(dx);
+        let w = tap_weight(k as u32);
         for v in [values[a], values[b]] {
             sum[0] += v[0] * w;
             sum[1] += v[1] * w;
@@ -143,6 +143,22 @@ pub fn filter_pixel(
     }
     let n = weight_sum;
     [sum[0] / n, sum[1] / n, sum[2] / n, sum[3] / n]
+}
+
+/// The weight of tap `k` of the window (bit `(dy + 2)·5 + (dx + 2)`): 1, on the outer ring
+/// (|dx| or |dy| = 2) a half, on its corners a quarter, so that in a full window each of
+/// the 16 sample sets weighs 1. Powers of two: a weight times a value is exact.
+pub fn tap_weight(k: u32) -> f32 {
+    let ring = |d: u32| if d == 0 || d == 4 { 0.5 } else { 1.0 };
+    ring(k / 5) * ring(k % 5)
+}
+
+/// The G-buffer's depths and shading normals, row-major, as the twin's slices.
+pub fn depths_and_normals(gbuffer: &[GBufferTexel]) -> (Vec<f32>, Vec<[f32; 3]>) {
+    (
+        gbuffer.iter().map(|t| t.depth).collect(),
+        gbuffer.iter().map(|t| t.normal.to_array()).collect(),
+    )
 }
 
 /// The taps of `(x, y)`'s window that [`filter_pixel`] averages, one bit each

@@ -36,7 +36,7 @@ use crate::contract::filter::FULL_WINDOW;
 use crate::contract::filter::FilterParams;
 use crate::contract::layout::MASK_FULL;
 use crate::contract::layout::{GBufferTexel, RefineParams, ShadeParams, ShadowParams};
-use crate::reference::filter::paired_taps;
+use crate::reference::filter::{depths_and_normals, paired_taps, tap_weight};
 use crate::reference::shade::unshadowed_irradiance;
 use crate::reference::shadow_per_ray::per_ray_mask;
 use crate::sampling::{SAMPLES_PER_SET, pixel_set};
@@ -138,12 +138,11 @@ pub fn refine_score(
 ) -> f32 {
     let width = params.width as usize;
     let taps = paired_taps(&selection_params(params), values, depth, normal, x, y);
-    let tap_weight = |d: i32| if d.abs() == 2 { 0.5f32 } else { 1.0 };
     let (mut weight, mut variance) = (0.0f32, 0.0f32);
     for k in (0..25i32).filter(|k| taps & (1 << k) != 0) {
         let (dy, dx) = (k / 5 - 2, k % 5 - 2);
         let u = values[(y as i32 + dy) as usize * width + (x as i32 + dx) as usize][3];
-        let w = tap_weight(dx) * tap_weight(dy);
+        let w = tap_weight(k as u32);
         weight += w;
         variance += w * w * (u * (1.0 - u) / 16.0);
     }
@@ -206,8 +205,7 @@ pub fn refine_image(
     sets: u32,
     filtered: &mut [[f32; 4]],
 ) -> Vec<bool> {
-    let depth: Vec<f32> = gbuffer.iter().map(|t| t.depth).collect();
-    let normal: Vec<[f32; 3]> = gbuffer.iter().map(|t| t.normal.to_array()).collect();
+    let (depth, normal) = depths_and_normals(gbuffer);
     let mut refined = vec![false; gbuffer.len()];
     let per_tile = pixels_per_tile(sets) as usize;
     let pixels = refined_pixels(filter, values, filtered, &depth, &normal, budget, sets);
