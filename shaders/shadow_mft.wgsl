@@ -33,7 +33,7 @@ const TESTED: u32 = 0x20000u;
 // Frustum shrinking, the paper's "CR": at the start, and after a leaf that
 // blocked rays of a frustum, its corner rays go through the corners of the
 // light rectangle that holds its still-active samples
-// (reference::mft::Frustum::shrink_to).
+// (reference::shadow_mft::Frustum::shrink_to).
 override SHRINK: bool = false;
 const SHRINK_MARGIN: f32 = 0.0009765625;  // 1/1024 of a light edge
 const SHRINK_FLAG: u32 = 0x80000000u;
@@ -74,7 +74,7 @@ var<private> f_initial: u32;
 // Traversal and leaves are two stages with one leaf between them: the
 // traversal walks on to the next leaf (`p_*`) while the leaf stage tests the
 // current one, so that one pass of the loop can do work in both. Every lane
-// holds the same values. Twin: reference::mft::VectorState.
+// holds the same values. Twin: reference::shadow_mft::VectorState.
 var<private> t_children: u32;  // first child of the inner node to visit next (when not popping)
 var<private> t_mask: u32;      // frusta that entered that node
 var<private> t_depth: u32;     // stack depth
@@ -172,7 +172,7 @@ fn side_plane(a: vec3<f32>, b: vec3<f32>, centre: vec3<f32>) -> vec3<f32> {
 }
 
 // Light coordinates (s, t) of this lane's 16 samples: its rays go from the
-// origin to c0 + s eu + t ev (reference::mft::Frustum::st).
+// origin to c0 + s eu + t ev (reference::shadow_mft::Frustum::st).
 var<private> f_st: array<vec2<f32>, 16>;
 // The light rectangle shrink_to grows over the samples not yet blocked.
 var<private> shrink_lo: vec2<f32>;
@@ -247,7 +247,7 @@ fn box_outside(n: vec3<f32>, p0: vec3<f32>, node: BvhNode) -> bool {
     return dot(n, p - p0) < 0.0;
 }
 
-// Twin: reference::mft::frustum_may_hit_box.
+// Twin: reference::shadow_mft::frustum_may_hit_box.
 fn frustum_may_hit_box(node: BvhNode) -> bool {
     // The boxes' axes too: this catches boxes beside a thin frustum's apex
     // that straddle two of its planes (Sponza atrium 512²: 7 % fewer box tests).
@@ -354,7 +354,7 @@ fn frustum_culls_triangle(tri: BvhTriangle) -> bool {
 
 // Per-lane leaves: culls the triangle against this lane's frustum, else tests
 // its 16 rays (hit bits | TESTED); the arithmetic of
-// reference::mft::frustum_test_triangle, in the same order.
+// reference::shadow_mft::frustum_test_triangle, in the same order.
 fn test_triangle(tri: BvhTriangle) -> u32 {
     if planes_cull(tri) {
         return 0u;
@@ -446,7 +446,7 @@ fn shadow_area(n: BvhNode) -> f32 {
 // 602K, columns 190K vs 362K, bunny 187K vs 218K, playground 86K vs 90K,
 // engine 73K vs 56K, Cornell box, duck and lattice within 3 %. The packet
 // kernel, which cannot shrink, keeps the latter. Twin:
-// reference::mft::right_first.
+// reference::shadow_mft::right_first.
 fn right_first(nl: BvhNode, nr: BvhNode) -> bool {
     let al = shadow_area(nl);
     let ar = shadow_area(nr);
