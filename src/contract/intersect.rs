@@ -1,5 +1,5 @@
 //! What the ray–box test of every traversal (`shaders/shared/intersect.wgsl` and the CPU
-//! twins' [`crate::reference::intersect`]) agrees on.
+//! twins' [`crate::reference::intersect_box`]) agrees on.
 
 /// `1 + 2γ₃` with `γₙ = n·ε / (1 − n·ε)`, ε = 2⁻²⁴: scaling the slab test's exit
 /// distance by it makes the f32 box test conservative (Ize, "Robust BVH Ray

@@ -1,6 +1,6 @@
-//! The standalone renderer: primary pass → the shadow stages ([`ShadowStages`]: shadow
+//! The standalone renderer: primary pass → the shadow stages (`ShadowStages`: shadow
 //! rays, shading, filter, refinement) on the GPU, read back as a [`Frame`]; images too
-//! large for one buffer are rendered in tiles ([`super::tiling`]).
+//! large for one buffer are rendered in tiles (`gpu::tiling`).
 
 use glam::Vec3;
 

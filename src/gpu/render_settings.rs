@@ -75,7 +75,7 @@ pub struct RendererOptions {
     /// The shadow tracer. [`Tracer::Reference`] frames should be rendered without the
     /// filter (the reference is the unfiltered yardstick); the renderer does not enforce it.
     pub tracer: Tracer,
-    /// Count the shadow kernel's work ([`ShadowStats::counters`]).
+    /// Count the shadow kernel's work ([`ShadowStats::counters`](crate::gpu::ShadowStats::counters)).
     pub counters: bool,
     /// MFT frustum shrinking ([`TracerOptions::shrink`]; on by default).
     pub shrink: bool,
@@ -84,7 +84,7 @@ pub struct RendererOptions {
     /// Loop iterations a multi-frusta primary vector may run (at least 1; 60,000 by
     /// default, below lavapipe's loop limit); a frame where one runs out is traced again
     /// by the per-ray kernel (tests lower it), one where the driver ends a loop (a budget
-    /// above its limit) is an [`Error::LoopCut`].
+    /// above its limit) is an [`Error::LoopCut`](crate::Error::LoopCut).
     pub primary_iteration_budget: u32,
 }
 

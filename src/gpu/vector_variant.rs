@@ -43,7 +43,7 @@ impl VectorVariant {
     /// vectors per workgroup (the kernels' `VEC16_PER_WG`).
     ///
     /// Subgroups share words by reductions on lavapipe from Mesa 24.3 on and by broadcasts
-    /// elsewhere ([`reductions_share_words_faster`]); both give the same bits.
+    /// elsewhere (`reductions_share_words_faster`); both give the same bits.
     pub fn choose(info: &AdapterSummary, forced: Option<VectorVariant>) -> Result<(VectorVariant, u32)> {
         let size = info.subgroup_min_size;
         let subgroup_ok = info.has_subgroups

@@ -2,7 +2,7 @@
 //! tone-mapped sRGB as PNG.
 //!
 //! The format follows the file's extension, case-insensitive: `.png` or `.exr`
-//! ([`SUPPORTED_EXTENSIONS`]); anything else is an [`Error::Output`].
+//! ([`SUPPORTED_EXTENSIONS`]); anything else is an [`Error::Output`](crate::Error::Output).
 //!
 //! # PNG tone map
 //!

@@ -227,7 +227,7 @@ pub enum TriangleOutcome {
 /// then two multiply-adds per edge and ray.
 ///
 /// The hit bits of an alpha-tested triangle leave out the rays its mask lets pass
-/// ([`AlphaMasks::passes`] at [`EdgeFunctions::weights`]).
+/// ([`AlphaMasks::passes`] at `EdgeFunctions::weights`).
 pub fn frustum_test_triangle(
     f: &Frustum,
     tri: &BvhTriangle,
