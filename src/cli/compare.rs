@@ -69,6 +69,9 @@ fn parse_scale(s: &str) -> std::result::Result<f32, String> {
 
 /// Reads both images, prints the metrics, writes the difference picture if asked.
 pub fn run(args: &CompareArgs) -> Result<()> {
+    if let Some(path) = &args.diff {
+        super::check_output_folder(path)?;
+    }
     let a = read_rgba_image(&args.test)?;
     let b = read_rgba_image(&args.reference)?;
     if (a.width, a.height) != (b.width, b.height) {

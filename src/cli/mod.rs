@@ -39,6 +39,26 @@ pub fn write_stdout(args: std::fmt::Arguments<'_>) {
     }
 }
 
+/// Fails with [`penumbra::Error::Output`] naming `path` when the folder it would be written
+/// into does not exist: commands check their output paths before the work, so that a
+/// mistyped folder does not cost a whole render or a half-hour quality run.
+pub fn check_output_folder(path: &std::path::Path) -> penumbra::Result<()> {
+    let folder = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => std::path::Path::new("."),
+    };
+    if folder.is_dir() {
+        return Ok(());
+    }
+    Err(penumbra::Error::Output {
+        path: path.to_path_buf(),
+        message: format!(
+            "cannot write there: the folder {} does not exist",
+            folder.display()
+        ),
+    })
+}
+
 mod bench;
 mod compare;
 mod exact;

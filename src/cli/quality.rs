@@ -160,6 +160,16 @@ fn print_filter_windows(windows: &[WindowClassError]) {
 /// Renders every method, prints its errors against exact visibility.
 pub fn run(args: &QualityArgs) -> Result<()> {
     super::render::check_refine_args(Some(args.ray_budget), args.refine_sets)?;
+    // Output paths first: the exact visibility can take many minutes.
+    if let Some(path) = &args.json {
+        super::check_output_folder(path)?;
+    }
+    if let Some(dir) = &args.images {
+        std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+            path: dir.clone(),
+            source,
+        })?;
+    }
     let (w, h) = args.size;
     let (scene, view) = load_scene_and_view(args.scene.as_deref(), args.view.as_deref())?;
     let bvh = Bvh::build(&scene, &args.bvh.settings())?;
@@ -344,10 +354,6 @@ pub fn run(args: &QualityArgs) -> Result<()> {
     );
     print_filter_windows(&windows);
     if let Some(dir) = &args.images {
-        std::fs::create_dir_all(dir).map_err(|source| Error::Io {
-            path: dir.clone(),
-            source,
-        })?;
         let images = methods
             .iter()
             .map(|(n, v, _, _)| (n.as_str(), v))

@@ -347,6 +347,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             message: "unsupported output format: use .png or .exr".into(),
         });
     }
+    super::check_output_folder(&args.output)?;
     let (width, height) = args.size;
     // The scene loads and its BVH builds on a second thread while the device and the
     // pipelines are made (each a tenth of a second or more on lavapipe). A scene error

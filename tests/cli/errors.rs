@@ -92,6 +92,31 @@ fn missing_file_is_one_line_and_exit_1() {
     assert!(stderr.starts_with("error: /no/such/scene.glb:"), "{stderr}");
 }
 
+/// Every command that writes a file refuses a path into a folder that does not exist
+/// before it does any work (a quality run can take many minutes): one line, exit 1,
+/// nothing on stdout.
+#[test]
+fn outputs_into_missing_folders_are_refused_before_any_work() {
+    let (json, diff) = ("/no/such/folder/out.json", "/no/such/folder/diff.png");
+    for args in [
+        vec!["render", "--size", "8x8", "--output", "/no/such/folder/out.png"],
+        vec!["bench", "--size", "8x8", "--json", json],
+        vec!["quality", "--size", "8x8", "--json", json],
+        vec!["compare", "a.png", "b.png", "--diff", diff],
+    ] {
+        let out = penumbra(&args);
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
+        assert!(
+            stderr.starts_with("error: /no/such/folder/")
+                && stderr.contains("cannot write there: the folder /no/such/folder does not exist"),
+            "{args:?}: {stderr}"
+        );
+        assert!(out.stdout.is_empty(), "{args:?}: {}", text(&out.stdout));
+    }
+}
+
 #[test]
 fn malformed_file_names_the_file_and_the_problem() {
     let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli_truncated.glb");

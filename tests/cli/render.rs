@@ -232,6 +232,10 @@ fn bad_render_arguments_fail_with_one_line() {
         ),
         (vec!["render", "--spp", "64"], "exactly 16 rays"),
         (vec!["render", "--view", "nope.json"], "nope.json"),
+        (
+            vec!["render", "--output", "missing/x.png"],
+            "missing/x.png: cannot write there: the folder missing does not exist",
+        ),
     ] {
         let out = Command::new(env!("CARGO_BIN_EXE_penumbra"))
             .args(&args)
@@ -245,6 +249,12 @@ fn bad_render_arguments_fail_with_one_line() {
                 .lines()
                 .any(|l| l.starts_with("error: ") && l.contains(needle)),
             "{args:?}: {stderr}"
+        );
+        // Refused before any rendering: nothing on standard output.
+        assert!(
+            out.stdout.is_empty(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stdout)
         );
     }
     assert!(!dir.join("x.jpg").exists());

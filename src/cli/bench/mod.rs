@@ -114,6 +114,9 @@ fn parse_tracer(s: &str) -> std::result::Result<BenchTracer, String> {
 
 /// Runs the benchmark and prints its table.
 pub fn run(args: &BenchArgs) -> Result<()> {
+    if let Some(path) = &args.json {
+        crate::cli::check_output_folder(path)?;
+    }
     // (tracer, shrink): MFT first, the speedups are over it.
     let mut tracers = vec![(Tracer::Mft, true)];
     if args.without_cr {
