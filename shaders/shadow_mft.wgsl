@@ -632,8 +632,9 @@ fn main(ids: Vec16Ids) {
     // Each pass of the loop may do, in this order: two traversal steps (each a
     // stack pop and an inner node), one or two triangles of the current leaf
     // (with transposed leaves, one, then the inner loop over its candidate
-    // frusta) and the end of a leaf. lavapipe runs every branch of the body
-    // (masked) at every pass, so a pass pays for all of it whatever it does:
+    // frusta) and the end of a leaf. Mesa 22.3 lavapipe runs every branch of the
+    // body (masked) at every pass, so a pass pays for all of it whatever it does
+    // (Mesa 25 skips a branch no lane takes; README "The bunny, tile by tile"):
     // the two stages let it do work in both, and two traversal steps match the
     // traversal's steps to the leaves' (Sponza: 948K passes with one stage,
     // 849K with two, 648K with two traversal steps). lavapipe also counts every
