@@ -105,7 +105,8 @@ pub static SOURCES: &[(&str, &str)] = &[
 /// An alias set: `(import name, module to use instead)`.
 pub type Aliases<'a> = &'a [(&'a str, &'a str)];
 
-/// The alias of the shadow kernels' build without the alpha binding ([`crate::gpu::kernel::AlphaKernels`]).
+/// The alias of the shadow kernels' build without the alpha binding
+/// ([`crate::gpu::kernel::AlphaKernels`]).
 pub const NO_ALPHA: (&str, &str) = ("shared/alpha_words", "shared/alpha_none");
 
 /// Every kernel (a top-level file of [`SOURCES`]) with the alias sets of all its variants;

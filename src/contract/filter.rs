@@ -10,7 +10,8 @@ use bytemuck::{Pod, Zeroable};
 ///
 /// Bindings, group 0: 0 `filter_params: FilterParams` (uniform), 1 `values:
 /// texture_2d<f32>`, 2 `normal: texture_2d<f32>` (the normal in xyz and the depth in w;
-/// see [`normals_for_gpu`](crate::reference::filter::normals_for_gpu)), both width×height `Rgba32Float` textures
+/// see [`normals_for_gpu`](crate::reference::filter::normals_for_gpu)), both width×height
+/// `Rgba32Float` textures
 /// ([`crate::gpu::FILTER_INPUT_TEXTURES`]), and 3 `filtered: array<vec4<f32>>`
 /// (read-write storage, the output, row-major).
 pub const FILTER_KERNEL: &str = "filter";

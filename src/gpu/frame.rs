@@ -58,7 +58,8 @@ pub struct Frame {
     /// Diffuse BRDF, albedo / π (rgb; a unused); 0 for sky pixels.
     pub brdf: Vec<[f32; 4]>,
     /// The G-buffer, when [`super::FrameSettings::keep_gbuffer`] asked for it; positions are
-    /// relative to [`GpuScene::origin`](crate::gpu::GpuScene::origin) (the world's for a scene near the origin).
+    /// relative to [`GpuScene::origin`](crate::gpu::GpuScene::origin) (the world's for a scene
+    /// near the origin).
     pub gbuffer: Option<Vec<GBufferTexel>>,
     /// GPU milliseconds per pass: `primary`, `shadow` (all its dispatches), `shade`, `filter`.
     pub timings: Vec<(String, f64)>,

@@ -75,7 +75,8 @@ pub struct RendererOptions {
     /// The shadow tracer. [`Tracer::Reference`] frames should be rendered without the
     /// filter (the reference is the unfiltered yardstick); the renderer does not enforce it.
     pub tracer: Tracer,
-    /// Count the shadow kernel's work ([`ShadowStats::counters`](crate::gpu::ShadowStats::counters)).
+    /// Count the shadow kernel's work
+    /// ([`ShadowStats::counters`](crate::gpu::ShadowStats::counters)).
     pub counters: bool,
     /// MFT frustum shrinking ([`TracerOptions::shrink`]; on by default).
     pub shrink: bool,

@@ -164,7 +164,8 @@ pub fn depths_and_normals(gbuffer: &[GBufferTexel]) -> (Vec<f32>, Vec<[f32; 3]>)
 /// The taps of `(x, y)`'s window that [`filter_pixel`] averages, one bit each
 /// (`(dy + 2)·5 + (dx + 2)`): inside the image, at a similar depth, normal and
 /// unfiltered visibility, and with their mirror image through the centre too;
-/// the centre always. [`FULL_WINDOW`](crate::contract::filter::FULL_WINDOW) when nothing cuts the window. The centre
+/// the centre always. [`FULL_WINDOW`](crate::contract::filter::FULL_WINDOW) when nothing cuts
+/// the window. The centre
 /// must have a hit. WGSL twin: `paired_taps` in `shaders/shared/filter_window.wgsl`.
 ///
 /// # Panics
