@@ -64,12 +64,9 @@ fn main() -> penumbra::Result<()> {
         scene.add_ground_plane(y);
     }
     let bvh = Bvh::build(&scene, &BvhSettings::default())?;
-    let cam = camera_params(
-        &view.camera,
-        size,
-        size,
-        scene.bounds().diagonal() * RAY_OFFSET_FRACTION,
-    );
+    // Scene::bounds walks every triangle: once, not per pixel.
+    let diagonal = scene.bounds().diagonal();
+    let cam = camera_params(&view.camera, size, size, diagonal * RAY_OFFSET_FRACTION);
     let gbuffer = primary_gbuffer(&bvh, &ShadingData::new(&scene, &bvh)?, &cam);
     let params = shadow_params(&view.light, size, size);
     let points = sampling::light_points(&view.light);
@@ -80,9 +77,8 @@ fn main() -> penumbra::Result<()> {
         transposed: false,
     };
     let on_ground = |t: &GBufferTexel| {
-        view.ground_y.is_some_and(|y| {
-            t.geo_normal.y > 0.99 && (t.origin.y - y).abs() <= 1e-3 * scene.bounds().diagonal()
-        })
+        view.ground_y
+            .is_some_and(|y| t.geo_normal.y > 0.99 && (t.origin.y - y).abs() <= 1e-3 * diagonal)
     };
 
     let mut sums = [[Sums::default(); 2]; 3];
