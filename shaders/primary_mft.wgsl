@@ -54,9 +54,11 @@ var<private> f_corner: array<vec3<f32>, 4>; // the corner-ray directions
 var<private> f_x0: u32;
 var<private> f_y0: u32;
 
-// The vector's traversal stack (the same in every lane): node, frusta that
-// want it, and its box's depth (to drop frusta whose rays have all hit nearer).
-var<private> stack_node: array<u32, 64>;
+// The vector's traversal stack (the same in every lane): a node's first child or
+// triangle and its triangle count (as in BvhNode, so a pop needs no node load), the
+// frusta that want it, and its box's depth (to drop frusta whose rays have all hit nearer).
+var<private> stack_first: array<u32, 64>;
+var<private> stack_count: array<u32, 64>;
 var<private> stack_mask: array<u32, 64>;
 var<private> stack_depth: array<f32, 64>;
 
@@ -314,8 +316,7 @@ fn main(ids: Vec16Ids) {
     let order_dir = edge_dir(bx * 16u + 8u, by * 16u + 8u);
 
     // The traversal state; every lane holds the same values.
-    var node = 0u;        // inner node to visit next (when not in a leaf)
-    var children = 0u;    // its first child, read when entering it
+    var children = 0u;    // the first child of the inner node to visit next (when not in a leaf)
     var mask = 0u;        // frusta that entered `node`
     var cursor = 0u;      // next triangle of the current leaf
     var end = 0u;         // end of the current leaf's triangles
@@ -353,7 +354,6 @@ fn main(ids: Vec16Ids) {
             overflow = running;
             break;
         }
-        var enter = false;
         let in_leaf = running && cursor < end;
         let pops = running && !in_leaf && popping;
         let visits = running && !in_leaf && !popping;
@@ -388,10 +388,13 @@ fn main(ids: Vec16Ids) {
                     depth -= 1u;
                     let m = stack_mask[depth] & near;
                     if m != 0u {
-                        node = stack_node[depth];
                         mask = m;
                         popping = false;
-                        enter = true;
+                        children = stack_first[depth];
+                        if stack_count[depth] > 0u {
+                            cursor = stack_first[depth];
+                            end = stack_first[depth] + stack_count[depth];
+                        }
                     }
                 }
             }
@@ -412,30 +415,30 @@ fn main(ids: Vec16Ids) {
                 n_box_tests += 2u;
                 // Nearer child first; the other waits on the stack with its frusta.
                 let d = descend(l, ml, mr, order_key(right, order_dir) < order_key(left, order_dir));
+                // The children's `first` and `count` come with the pair: entering or
+                // pushing one needs no node load.
                 if d.later_mask != 0u {
                     // The host checked that the BVH is shallower than the stack.
                     let top = min(depth, STACK_SIZE - 1u);
-                    stack_node[top] = d.later;
+                    let later_left = d.later == l;
+                    stack_first[top] = select(right.first, left.first, later_left);
+                    stack_count[top] = select(right.count, left.count, later_left);
                     stack_mask[top] = d.later_mask;
-                    stack_depth[top] = select(dr, dl, d.later == l);
+                    stack_depth[top] = select(dr, dl, later_left);
                     depth += 1u;
                 }
                 if d.mask != 0u {
-                    node = d.node;
                     mask = d.mask;
-                    enter = true;
+                    let now_left = d.node == l;
+                    let first = select(right.first, left.first, now_left);
+                    let count = select(right.count, left.count, now_left);
+                    children = first;
+                    if count > 0u {
+                        cursor = first;
+                        end = first + count;
+                    }
                 } else {
                     popping = true;
-                }
-            }
-        }
-        if group_may(enter) {
-            let c = load_node(select(0u, node, enter));
-            if enter {
-                children = c.first;
-                if c.count > 0u {
-                    cursor = c.first;
-                    end = c.first + c.count;
                 }
             }
         }
