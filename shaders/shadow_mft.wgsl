@@ -12,8 +12,8 @@
 #import shared/bvh_vec16
 
 // Suspended-state slot of a tile: status, children, mask, cursor, end, alive,
-// stack depth, popping (| 2: traversal done), 16 lane masks, 64 stack nodes,
-// 64 stack masks, the candidate frusta of a transposed leaf (`cand`), the
+// stack depth, popping (| 2: traversal done), 16 lane masks, 64 stack entries'
+// node firsts, their 64 masks with counts (STACK_COUNT_SHIFT), the candidate frusta of a transposed leaf (`cand`), the
 // current leaf's frusta, the pending leaf (first, end, frusta), 3 words
 // unused, and 16 lane words of `f_shrunk_for`.
 const STATE_WORDS: u32 = 176u;
@@ -466,22 +466,18 @@ fn right_first(nl: BvhNode, nr: BvhNode) -> bool {
 // in control flow uniform across the workgroup.
 fn traversal_step() {
     let pops = running && !t_done && p_end == 0u && t_popping;
-    var popped = 0u;    // frusta that go on into the node popped
-    var pop_node = 0u;  // that node (0 when none: a valid index for the idle load)
     if pops {
         if t_depth == 0u {
             t_done = true;
         } else {
             t_depth -= 1u;
-            popped = stack_mask[t_depth] & alive;
-            pop_node = stack_node[t_depth];
-        }
-    }
-    if group_may(popped != 0u) {
-        let c = load_node(pop_node);
-        if popped != 0u {
-            t_popping = false;
-            enter(popped, c.first, c.count);
+            // An entry holds the node's first and count (see the push below): a pop
+            // needs no node load.
+            let popped = stack_mask[t_depth] & alive;
+            if popped != 0u {
+                t_popping = false;
+                enter(popped, stack_node[t_depth], stack_mask[t_depth] >> STACK_COUNT_SHIFT);
+            }
         }
     }
     let visits = running && !t_done && p_end == 0u && !t_popping;
@@ -499,9 +495,14 @@ fn traversal_step() {
             n_boxes += 2u;
             let d = descend(l, ml, mr, right_first(nl, nr));
             if d.later_mask != 0u {
-                // The host checked that the BVH is shallower than the stack.
-                stack_node[min(t_depth, STACK_SIZE - 1u)] = d.later;
-                stack_mask[min(t_depth, STACK_SIZE - 1u)] = d.later_mask;
+                // The entry is the child's first and, above its 16 frusta's bits, its
+                // count (a leaf holds at most 255 triangles, MAX_LEAF_TRIANGLES), taken
+                // from the pair already loaded. The host checked that the BVH is
+                // shallower than the stack.
+                let later_right = d.later != l;
+                stack_node[min(t_depth, STACK_SIZE - 1u)] = select(nl.first, nr.first, later_right);
+                stack_mask[min(t_depth, STACK_SIZE - 1u)] =
+                    d.later_mask | (select(nl.count, nr.count, later_right) << STACK_COUNT_SHIFT);
                 t_depth += 1u;
             }
             if d.mask != 0u {

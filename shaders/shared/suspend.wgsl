@@ -11,9 +11,13 @@ const ST_LANES: u32 = 8u;        // 16 lane words
 const ST_STACK_NODE: u32 = 24u;  // STACK_SIZE stack nodes
 const ST_STACK_MASK: u32 = 88u;  // STACK_SIZE stack masks
 const STATUS_SUSPENDED: u32 = 1u;
+// The MFT kernel's stack entry: the node's first (stack_node) and its frusta with its
+// count above them, count << STACK_COUNT_SHIFT (stack_mask); the packet kernel's: the
+// node's index and its rays.
+const STACK_COUNT_SHIFT: u32 = 16u;
 
 // The vector's traversal stack (the same in every lane): node and frusta (MFT) or rays
-// (packet) that want it.
+// (packet) that want it (STACK_COUNT_SHIFT says how each kernel writes them).
 var<private> stack_node: array<u32, STACK_SIZE>;
 var<private> stack_mask: array<u32, STACK_SIZE>;
 

@@ -25,6 +25,7 @@ use glam::{Vec3, Vec3A};
 use obvhs::{BvhBuildParams, bvh2::builder::build_bvh2_from_tris, triangle::Triangle};
 
 use super::{AlphaMasks, BuildQuality, Bvh, BvhSettings};
+use crate::contract::bvh::MAX_LEAF_TRIANGLES;
 use crate::contract::layout::{BvhNode, BvhTriangle};
 use crate::{Error, Result};
 
@@ -43,11 +44,11 @@ pub(super) fn build(corners: &[[Vec3; 3]], settings: &BvhSettings) -> Result<Bvh
     if corners.is_empty() {
         return Err(Error::Bvh("the scene has no triangles".into()));
     }
-    if !(1..=255).contains(&settings.max_leaf_size) {
+    if !(1..=MAX_LEAF_TRIANGLES).contains(&settings.max_leaf_size) {
         return Err(Error::value(
             "BvhSettings::max_leaf_size",
             settings.max_leaf_size,
-            "must be in 1..=255",
+            format!("must be in 1..={MAX_LEAF_TRIANGLES}"),
         ));
     }
     if u32::try_from(corners.len()).is_err() {

@@ -8,6 +8,11 @@ use crate::contract::layout::{BvhNode, BvhTriangle};
 /// be traced ([`crate::gpu::validate_for_gpu`]).
 pub const STACK_SIZE: usize = 64;
 
+/// Most triangles one leaf holds ([`crate::bvh::BvhSettings::max_leaf_size`] at most; checked
+/// by [`crate::gpu::validate_for_gpu`]): the MFT shadow kernel keeps a stack entry's count in
+/// the 8 bits above its 16 frusta ([`crate::contract::suspend::STACK_COUNT_SHIFT`]).
+pub const MAX_LEAF_TRIANGLES: u32 = 255;
+
 /// 32-bit words of a [`BvhNode`] (`NODE_WORDS`, the vector kernels read nodes word by word).
 pub const NODE_WORDS: usize = size_of::<BvhNode>() / 4;
 

@@ -74,6 +74,7 @@ mod tests {
             ("ST_STACK_NODE", u(suspend::ST_STACK_NODE)),
             ("ST_STACK_MASK", u(suspend::ST_STACK_MASK)),
             ("STATUS_SUSPENDED", U32(suspend::STATUS_SUSPENDED)),
+            ("STACK_COUNT_SHIFT", U32(suspend::STACK_COUNT_SHIFT)),
             // primary_mft
             ("DEPTH_SLACK", F32(primary::DEPTH_SLACK)),
             ("T_NONE", F32(primary::T_NONE)),

@@ -7,7 +7,7 @@ use glam::Vec3;
 
 use super::{GpuContext, storage_buffer};
 use crate::bvh::Bvh;
-use crate::contract::bvh::STACK_SIZE;
+use crate::contract::bvh::{MAX_LEAF_TRIANGLES, STACK_SIZE};
 use crate::contract::layout::{BvhNode, BvhTriangle};
 use crate::pass_inputs::ShadingData;
 use crate::scene::Scene;
@@ -51,19 +51,21 @@ pub struct GpuScene {
 }
 
 /// Checks what the unchecked kernels index with: every child pair and every
-/// leaf range lies inside the arrays, and the tree fits the traversal stack.
+/// leaf range lies inside the arrays, no leaf holds more than [`MAX_LEAF_TRIANGLES`], and
+/// the tree fits the traversal stack.
 pub fn validate_for_gpu(bvh: &Bvh) -> Result<()> {
     let n_nodes = bvh.nodes.len() as u64;
     let n_tris = bvh.triangles.len() as u64;
     for (i, n) in bvh.nodes.iter().enumerate() {
         let ok = if n.is_leaf() {
-            u64::from(n.first) + u64::from(n.count) <= n_tris
+            n.count <= MAX_LEAF_TRIANGLES && u64::from(n.first) + u64::from(n.count) <= n_tris
         } else {
             u64::from(n.first) + 1 < n_nodes
         };
         if !ok {
             return Err(Error::Bvh(format!(
-                "node {i} points outside the node or triangle arrays"
+                "node {i} points outside the node or triangle arrays, or holds more than \
+                 {MAX_LEAF_TRIANGLES} triangles"
             )));
         }
     }

@@ -17,12 +17,14 @@ use glam::{Vec2, Vec3};
 use super::descend::descend;
 use super::shadow_per_ray::{initial_mask, light_corners};
 use crate::bvh::{AlphaMasks, Bvh};
-use crate::contract::bvh::STACK_SIZE;
+use crate::contract::bvh::{MAX_LEAF_TRIANGLES, STACK_SIZE};
 use crate::contract::layout::{BvhNode, BvhTriangle, GBufferTexel, MASK_FULL, MASK_SKY, ShadowParams};
 use crate::contract::shadow::{
     BOUNDS_PAD, SHRINK_FLAG, SHRINK_MARGIN, ST_CAND, ST_LEAF_MASK, ST_PENDING, ST_SHRUNK, STATE_WORDS,
 };
-use crate::contract::suspend::{ST_LANES, ST_STACK_MASK, ST_STACK_NODE, ST_STATUS, STATUS_SUSPENDED};
+use crate::contract::suspend::{
+    ST_LANES, ST_STACK_MASK, ST_STACK_NODE, ST_STATUS, STACK_COUNT_SHIFT, STATUS_SUSPENDED,
+};
 use crate::sampling::SAMPLES_PER_SET;
 
 /// The box around the origin and the light rectangle's corners, widened by [`BOUNDS_PAD`].
@@ -354,7 +356,8 @@ struct VectorState {
     pending: Option<(u32, u32, u32)>,
     /// Frusta not yet done.
     alive: u32,
-    /// Pending subtrees with the frusta that wanted them.
+    /// Pending subtrees as the kernel's stack words: the node's `first`, and the frusta
+    /// that wanted it with its `count << STACK_COUNT_SHIFT`.
     stack: Vec<(u32, u32)>,
     /// The next traversal step pops the stack.
     popping: bool,
@@ -374,13 +377,18 @@ impl VectorState {
     /// Moves to node `c` with frustum mask `m`; a leaf waits in `pending` and the
     /// traversal goes on from the stack.
     fn enter(&mut self, bvh: &Bvh, c: u32, m: u32) {
-        self.mask = m;
         let n = &bvh.nodes[c as usize];
-        if n.is_leaf() {
-            self.pending = Some((n.first, n.first + n.count, m));
+        self.enter_at(n.first, n.count, m);
+    }
+
+    /// As [`Self::enter`], for the node whose `first` and `count` are given (a stack entry).
+    fn enter_at(&mut self, first: u32, count: u32, m: u32) {
+        self.mask = m;
+        if count > 0 {
+            self.pending = Some((first, first + count, m));
             self.popping = true;
         } else {
-            self.children = n.first;
+            self.children = first;
         }
     }
 
@@ -479,9 +487,9 @@ fn traversal_step(
     if !st.traversal_done && st.pending.is_none() && st.popping {
         match st.stack.pop() {
             None => st.traversal_done = true,
-            Some((c, m)) if m & st.alive != 0 => {
+            Some((first, word)) if word & st.alive != 0 => {
                 st.popping = false;
-                st.enter(bvh, c, m & st.alive);
+                st.enter_at(first, word >> STACK_COUNT_SHIFT, word & st.alive);
             }
             Some(_) => {}
         }
@@ -498,9 +506,14 @@ fn traversal_step(
         };
         let (ml, mr) = (wants(l), wants(l + 1));
         let d = descend(l, ml, mr, right_first(bvh, l, params));
-        if let Some(later) = d.later {
+        if let Some((c, m)) = d.later {
             assert!(st.stack.len() < STACK_SIZE, "BVH deeper than the traversal stack");
-            st.stack.push(later);
+            let n = &bvh.nodes[c as usize];
+            assert!(
+                n.count <= MAX_LEAF_TRIANGLES,
+                "a leaf larger than the stack word holds"
+            );
+            st.stack.push((n.first, m | n.count << STACK_COUNT_SHIFT));
         }
         match d.now {
             Some((c, m)) => st.enter(bvh, c, m),
@@ -582,9 +595,9 @@ fn save(st: &VectorState, frusta: &[Frustum; 16], cand: u32) -> Box<[u32; STATE_
         w[ST_LANES + i] = f.occluded;
         w[ST_SHRUNK + i] = f.shrunk_for;
     }
-    for (i, &(node, mask)) in st.stack.iter().enumerate() {
-        w[ST_STACK_NODE + i] = node;
-        w[ST_STACK_MASK + i] = mask;
+    for (i, &(first, word)) in st.stack.iter().enumerate() {
+        w[ST_STACK_NODE + i] = first;
+        w[ST_STACK_MASK + i] = word;
     }
     w[ST_CAND] = cand;
     w[ST_LEAF_MASK] = st.leaf_mask;
