@@ -317,7 +317,7 @@ fn main(ids: Vec16Ids) {
 
     // The traversal state; every lane holds the same values.
     var children = 0u;    // the first child of the inner node to visit next (when not in a leaf)
-    var mask = 0u;        // frusta that entered `node`
+    var mask = 0u;        // frusta that entered the node being traced
     var cursor = 0u;      // next triangle of the current leaf
     var end = 0u;         // end of the current leaf's triangles
     var depth = 0u;       // stack depth
@@ -355,6 +355,11 @@ fn main(ids: Vec16Ids) {
             break;
         }
         let in_leaf = running && cursor < end;
+        // A node a pop or a visit enters, by its `first` and `count` (BvhNode's): they come
+        // with the stack entry or the visit's pair, so entering loads no node.
+        var entered = false;
+        var entered_first = 0u;
+        var entered_count = 0u;
         let pops = running && !in_leaf && popping;
         let visits = running && !in_leaf && !popping;
         if group_may(in_leaf) {
@@ -390,11 +395,9 @@ fn main(ids: Vec16Ids) {
                     if m != 0u {
                         mask = m;
                         popping = false;
-                        children = stack_first[depth];
-                        if stack_count[depth] > 0u {
-                            cursor = stack_first[depth];
-                            end = stack_first[depth] + stack_count[depth];
-                        }
+                        entered = true;
+                        entered_first = stack_first[depth];
+                        entered_count = stack_count[depth];
                     }
                 }
             }
@@ -415,8 +418,6 @@ fn main(ids: Vec16Ids) {
                 n_box_tests += 2u;
                 // Nearer child first; the other waits on the stack with its frusta.
                 let d = descend(l, ml, mr, order_key(right, order_dir) < order_key(left, order_dir));
-                // The children's `first` and `count` come with the pair: entering or
-                // pushing one needs no node load.
                 if d.later_mask != 0u {
                     // The host checked that the BVH is shallower than the stack.
                     let top = min(depth, STACK_SIZE - 1u);
@@ -430,16 +431,19 @@ fn main(ids: Vec16Ids) {
                 if d.mask != 0u {
                     mask = d.mask;
                     let now_left = d.node == l;
-                    let first = select(right.first, left.first, now_left);
-                    let count = select(right.count, left.count, now_left);
-                    children = first;
-                    if count > 0u {
-                        cursor = first;
-                        end = first + count;
-                    }
+                    entered = true;
+                    entered_first = select(right.first, left.first, now_left);
+                    entered_count = select(right.count, left.count, now_left);
                 } else {
                     popping = true;
                 }
+            }
+        }
+        if entered {
+            children = entered_first;
+            if entered_count > 0u {
+                cursor = entered_first;
+                end = entered_first + entered_count;
             }
         }
     }

@@ -12,10 +12,11 @@
 #import shared/bvh_vec16
 
 // Suspended-state slot of a tile: status, children, mask, cursor, end, alive,
-// stack depth, popping (| 2: traversal done), 16 lane masks, 64 stack entries'
-// node firsts, their 64 masks with counts (STACK_COUNT_SHIFT), the candidate frusta of a transposed leaf (`cand`), the
-// current leaf's frusta, the pending leaf (first, end, frusta), 3 words
-// unused, and 16 lane words of `f_shrunk_for`.
+// stack depth, popping (| 2: traversal done), 16 lane masks, the 64 stack
+// entries' node firsts, their 64 masks with counts (STACK_COUNT_SHIFT), the
+// candidate frusta of a transposed leaf (`cand`), the current leaf's frusta, the
+// pending leaf (first, end, frusta), 3 words unused, and 16 lane words of
+// `f_shrunk_for`.
 const STATE_WORDS: u32 = 176u;
 const ST_SHRUNK: u32 = 160u;
 const ST_CAND: u32 = 152u;

@@ -58,14 +58,19 @@ pub fn validate_for_gpu(bvh: &Bvh) -> Result<()> {
     let n_tris = bvh.triangles.len() as u64;
     for (i, n) in bvh.nodes.iter().enumerate() {
         let ok = if n.is_leaf() {
-            n.count <= MAX_LEAF_TRIANGLES && u64::from(n.first) + u64::from(n.count) <= n_tris
+            u64::from(n.first) + u64::from(n.count) <= n_tris
         } else {
             u64::from(n.first) + 1 < n_nodes
         };
         if !ok {
             return Err(Error::Bvh(format!(
-                "node {i} points outside the node or triangle arrays, or holds more than \
-                 {MAX_LEAF_TRIANGLES} triangles"
+                "node {i} points outside the node or triangle arrays"
+            )));
+        }
+        if n.is_leaf() && n.count > MAX_LEAF_TRIANGLES {
+            return Err(Error::Bvh(format!(
+                "leaf {i} holds {} triangles, more than the GPU kernels' {MAX_LEAF_TRIANGLES}",
+                n.count
             )));
         }
     }
