@@ -130,8 +130,7 @@ pub fn read_buffer<T: Pod>(
         ctx.queue.submit([encoder.finish()]);
         staging
     })?;
-    let bytes = map_read(ctx, &staging)?;
-    Ok(bytemuck::pod_collect_to_vec(&bytes))
+    map_read(ctx, &staging, bytemuck::pod_collect_to_vec)
 }
 
 /// Copies a 2-D, single-layer, single-sampled colour `texture` (which needs `COPY_SRC`) to
@@ -189,15 +188,22 @@ pub fn read_texture<T: Pod>(ctx: &GpuContext, texture: &wgpu::Texture) -> Result
         ctx.queue.submit([encoder.finish()]);
         staging
     })?;
-    let bytes = map_read(ctx, &staging)?;
-    Ok(bytes
-        .chunks(padded as usize)
-        .flat_map(|r| bytemuck::pod_collect_to_vec::<u8, T>(&r[..row as usize]))
-        .collect())
+    map_read(ctx, &staging, |bytes| {
+        bytes
+            .chunks(padded as usize)
+            .flat_map(|r| bytemuck::pod_collect_to_vec::<u8, T>(&r[..row as usize]))
+            .collect()
+    })
 }
 
-/// Maps all of `buffer` (a `MAP_READ` buffer), waits for it and returns a copy of its bytes.
-pub(crate) fn map_read(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
+/// Maps all of `buffer` (a `MAP_READ` buffer), waits for it and returns what `read` makes
+/// of its bytes: read straight from the mapping, as a second copy of a frame's 16 MB
+/// buffers cost several milliseconds each on lavapipe.
+pub(crate) fn map_read<R>(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    read: impl FnOnce(&[u8]) -> R,
+) -> Result<R> {
     let (sender, receiver) = std::sync::mpsc::channel();
     buffer.map_async(wgpu::MapMode::Read, .., move |result| {
         // The receiver outlives this callback: we block on it below.
@@ -215,12 +221,13 @@ pub(crate) fn map_read(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8
             ));
         }
     }
-    let bytes = buffer
-        .get_mapped_range(..)
-        .map_err(|e| Error::Gpu(format!("reading a mapped buffer failed: {e}")))?
-        .to_vec();
+    let value = read(
+        &buffer
+            .get_mapped_range(..)
+            .map_err(|e| Error::Gpu(format!("reading a mapped buffer failed: {e}")))?,
+    );
     buffer.unmap();
-    Ok(bytes)
+    Ok(value)
 }
 
 /// `bytes` rounded up to a multiple of 4, and at least [`MIN_BUFFER_BYTES`].

@@ -182,8 +182,7 @@ impl GpuTimer {
         if n_resolved == 0 {
             return Ok(Vec::new());
         }
-        let bytes = map_read(ctx, &queries.readback)?;
-        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&bytes);
+        let ticks: Vec<u64> = map_read(ctx, &queries.readback, bytemuck::pod_collect_to_vec)?;
         let ns_per_tick = f64::from(ctx.queue.get_timestamp_period());
         Ok(labels
             .into_iter()
