@@ -337,12 +337,15 @@ fn main(ids: Vec16Ids) {
         cursor = root.first;
         end = root.first + root.count;
     }
-    // One step per iteration: one leaf triangle, one stack pop, or one inner
-    // node. No other loop in here: lavapipe counts every iteration of every
-    // loop an invocation runs, nested ones included, against one limit. The loop
-    // runs while any vector of the workgroup runs (group_any), and each step's
-    // vector operations run where any vector needs them (group_may), so that they
-    // stay in control flow uniform across the workgroup.
+    // Each iteration is one pass: a leaf triangle, a stack pop and an inner node's
+    // visit, each where the state the one before left calls for it. Mesa 22.3 lavapipe
+    // runs all three (masked) at every pass whatever the vector needs, so it pays for
+    // fewer passes when one pass may do all three. No other loop in
+    // here: lavapipe counts every iteration of every loop an invocation runs, nested
+    // ones included, against one limit. The loop runs while any vector of the
+    // workgroup runs (group_any), and each step's vector operations run where any
+    // vector needs them (group_may), so that they stay in control flow uniform across
+    // the workgroup.
     var iterations = 0u;
     var overflow = false;
     loop {
@@ -355,13 +358,6 @@ fn main(ids: Vec16Ids) {
             break;
         }
         let in_leaf = running && cursor < end;
-        // A node a pop or a visit enters, by its `first` and `count` (BvhNode's): they come
-        // with the stack entry or the visit's pair, so entering loads no node.
-        var entered = false;
-        var entered_first = 0u;
-        var entered_count = 0u;
-        let pops = running && !in_leaf && popping;
-        let visits = running && !in_leaf && !popping;
         if group_may(in_leaf) {
             let tri = load_triangle(select(0u, cursor, in_leaf));
             let tested = in_leaf & ((mask & (1u << g_lane)) != 0u) & !frustum_culls_triangle(tri);
@@ -381,6 +377,7 @@ fn main(ids: Vec16Ids) {
                 }
             }
         }
+        let pops = running && cursor >= end && popping;
         if group_any(pops) {
             // Frusta whose rays have all hit nearer than the box drop it
             // (a compare with the stored depth, not a box test).
@@ -395,13 +392,17 @@ fn main(ids: Vec16Ids) {
                     if m != 0u {
                         mask = m;
                         popping = false;
-                        entered = true;
-                        entered_first = stack_first[depth];
-                        entered_count = stack_count[depth];
+                        children = stack_first[depth];
+                        let count = stack_count[depth];
+                        if count > 0u {
+                            cursor = children;
+                            end = children + count;
+                        }
                     }
                 }
             }
         }
+        let visits = running && cursor >= end && !popping;
         if group_any(visits) {
             // Nodes 0 and 1 for a vector with nothing to visit (GpuScene holds two nodes at least).
             let l = select(0u, children, visits);
@@ -431,19 +432,15 @@ fn main(ids: Vec16Ids) {
                 if d.mask != 0u {
                     mask = d.mask;
                     let now_left = d.node == l;
-                    entered = true;
-                    entered_first = select(right.first, left.first, now_left);
-                    entered_count = select(right.count, left.count, now_left);
+                    children = select(right.first, left.first, now_left);
+                    let count = select(right.count, left.count, now_left);
+                    if count > 0u {
+                        cursor = children;
+                        end = children + count;
+                    }
                 } else {
                     popping = true;
                 }
-            }
-        }
-        if entered {
-            children = entered_first;
-            if entered_count > 0u {
-                cursor = entered_first;
-                end = entered_first + entered_count;
             }
         }
     }

@@ -192,13 +192,29 @@ pub struct BlockResult {
     pub frusta: [PixelFrustum; 16],
     /// The vector ran out of its iteration budget (the hits are incomplete).
     pub overflow: bool,
+    /// The loop passes it ran: with a budget of at least this many it finishes, with one
+    /// fewer it runs out (a test pins the kernel's pass structure by it).
+    pub passes: u32,
+}
+
+/// The leaf range `(cursor, end)` after entering `node`: its triangles for a leaf,
+/// `current` (already used up) for an inner node.
+fn enter(bvh: &Bvh, node: u32, current: (u32, u32)) -> (u32, u32) {
+    let n = &bvh.nodes[node as usize];
+    if n.is_leaf() {
+        (n.first, n.first + n.count)
+    } else {
+        current
+    }
 }
 
 /// Traces block `(bx, by)` as the kernel's vector does, adding its work to `counters`.
 ///
-/// Each loop iteration is one step, as in the kernel: one leaf triangle, one
-/// stack pop, or one inner node. After `budget` steps the vector stops with
-/// what it has and reports an overflow, as the kernel does.
+/// Each loop iteration is one pass of the kernel's loop: a leaf triangle (in a leaf),
+/// then a stack pop (where the leaf is done or the last visit entered nothing), then an
+/// inner node's visit (where the vector is at one), each from the state the one before
+/// left. After `budget` passes the vector stops with what it has and reports an
+/// overflow, as the kernel does.
 pub fn trace_block(
     bvh: &Bvh,
     cam: &CameraParams,
@@ -238,7 +254,6 @@ pub fn trace_block(
             overflow = true;
             break;
         }
-        let mut enter = false;
         if cursor < end {
             let tri = &bvh.triangles[cursor as usize];
             let mut survivors = 0u32;
@@ -253,18 +268,21 @@ pub fn trace_block(
             counters.triangle_tests += u64::from(survivors.count_ones());
             cursor += 1;
             popping = cursor == end;
-        } else if popping {
+        }
+        if cursor >= end && popping {
             match stack.pop() {
                 None => running = false,
                 Some((c, m, depth)) => {
                     // Frusta whose rays have all hit nearer than the box drop it.
                     let m = m & ballot(&frusta, |_, f| depth <= f.t_max * DEPTH_SLACK);
                     if m != 0 {
-                        (node, mask, popping, enter) = (c, m, false, true);
+                        (node, mask, popping) = (c, m, false);
+                        (cursor, end) = enter(bvh, node, (cursor, end));
                     }
                 }
             }
-        } else {
+        }
+        if running && cursor >= end && !popping {
             counters.nodes_visited += 1;
             counters.box_tests += 2;
             let l = bvh.nodes[node as usize].first;
@@ -284,18 +302,19 @@ pub fn trace_block(
                 stack.push((c, m, if c == l { dl } else { dr }));
             }
             match d.now {
-                Some((c, m)) => (node, mask, enter) = (c, m, true),
+                Some((c, m)) => {
+                    (node, mask) = (c, m);
+                    (cursor, end) = enter(bvh, node, (cursor, end));
+                }
                 None => popping = true,
             }
         }
-        if enter {
-            let c = &bvh.nodes[node as usize];
-            if c.is_leaf() {
-                (cursor, end) = (c.first, c.first + c.count);
-            }
-        }
     }
-    BlockResult { frusta, overflow }
+    BlockResult {
+        frusta,
+        overflow,
+        passes: iterations.min(budget),
+    }
 }
 
 /// What the multi-frusta primary pass produced.

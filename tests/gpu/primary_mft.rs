@@ -19,7 +19,7 @@ use penumbra::gpu::{
 };
 use penumbra::pass_inputs::{RAY_OFFSET_FRACTION, ShadingData, camera_params};
 use penumbra::reference::primary::primary_gbuffer_counted;
-use penumbra::reference::primary_mft::{ITERATION_BUDGET, primary_mft_gbuffer};
+use penumbra::reference::primary_mft::{ITERATION_BUDGET, primary_mft_gbuffer, trace_block};
 use penumbra::scene::Scene;
 use penumbra::scene::view::Camera;
 use support::gpu::{ctx, embedded, variants};
@@ -367,6 +367,91 @@ fn counters_by_hand_small_triangle_in_one_frustum() {
     }
 }
 
+/// The multi-frusta pass with vector `v` and `budget` iterations on `case`, recorded once:
+/// the pixels it reports out of iterations (with the pass, scene and G-buffer, to run again).
+fn overflow_pixels(case: &Case, v: VectorVariant, budget: u32) -> (PrimaryPass, GpuScene, wgpu::Buffer, u64) {
+    let pass = PrimaryPass::new(
+        ctx(),
+        &PrimaryOptions {
+            tracer: PrimaryTracer::Mft,
+            variant: Some(v),
+            iteration_budget: budget,
+            ..PrimaryOptions::default()
+        },
+    )
+    .unwrap();
+    let (w, h) = (case.cam.width, case.cam.height);
+    let gpu_scene = GpuScene::new(ctx(), &case.scene, &case.bvh).unwrap();
+    let bytes = u64::from(w * h) * size_of::<GBufferTexel>() as u64;
+    let gbuffer = empty_storage_buffer(ctx(), "G-buffer", bytes, wgpu::BufferUsages::empty()).unwrap();
+    let status = PrimaryPass::status_buffer(&ctx().device);
+    let camera = penumbra::gpu::kernel::uniform_buffer(ctx(), "camera", &case.cam);
+    let mut encoder = ctx().device.create_command_encoder(&Default::default());
+    let groups = pass.workgroups(ctx(), w, h).unwrap();
+    pass.record(
+        &ctx().device,
+        &mut encoder,
+        &gpu_scene,
+        &camera,
+        &gbuffer,
+        &status,
+        groups,
+        None,
+    )
+    .unwrap();
+    ctx().queue.submit([encoder.finish()]);
+    let reported = pass.read_status(ctx(), &status).unwrap().overflow_pixels;
+    (pass, gpu_scene, gbuffer, u64::from(reported))
+}
+
+/// Every vector runs as many loop passes as its CPU twin: for each pass count `p` a
+/// block of the image needs, the kernel with a budget of `p - 1` reports the pixels of
+/// exactly the blocks the twin says need more than `p - 1`, and with `p` those needing
+/// more than `p`. So a kernel that does more (or less) in one pass than the twin fails.
+#[test]
+fn every_vector_runs_its_twins_passes() {
+    let (scene, view) = embedded("playground");
+    let case = Case::new(
+        "playground",
+        scene,
+        &view.camera,
+        &BvhSettings::default(),
+        (69, 41),
+    );
+    let (bw, bh) = (case.cam.width.div_ceil(16), case.cam.height.div_ceil(16));
+    let mut passes: Vec<u32> = (0..bh)
+        .flat_map(|by| (0..bw).map(move |bx| (bx, by)))
+        .map(|(bx, by)| {
+            let mut counters = Counters::default();
+            trace_block(&case.bvh, &case.cam, bx, by, ITERATION_BUDGET, &mut counters).passes
+        })
+        .collect();
+    passes.sort_unstable();
+    passes.dedup();
+    assert!(
+        passes.len() > 3,
+        "blocks with few distinct pass counts: {passes:?}"
+    );
+    // Four of them, lowest to highest (each budget is a pipeline to compile).
+    let n = passes.len() - 1;
+    let passes: Vec<u32> = [0, n / 3, 2 * n / 3, n].map(|i| passes[i]).to_vec();
+    let shading = case.shading();
+    for v in variants() {
+        for &p in &passes {
+            // A budget of 0 is refused (running_out_of_iterations_is_an_error).
+            for budget in [p.saturating_sub(1), p].into_iter().filter(|&b| b > 0) {
+                let twin = primary_mft_gbuffer(&case.bvh, &shading, &case.cam, budget).overflow_pixels;
+                let (.., reported) = overflow_pixels(&case, v, budget);
+                assert_eq!(
+                    reported, twin,
+                    "{v}, budget {budget}: pixels out of iterations, GPU vs CPU twin"
+                );
+            }
+        }
+        eprintln!("{v}: pass counts {passes:?} as the twin's");
+    }
+}
+
 /// With a budget of a few loop iterations, some vectors stop early: the kernel
 /// reports exactly the pixels of those vectors (as the CPU twin counts them)
 /// and the pass turns that into an error, never a silently incomplete G-buffer.
@@ -388,39 +473,9 @@ fn running_out_of_iterations_is_an_error() {
         .find(|(_, t)| t.overflow_pixels > 0 && t.overflow_pixels < 37 * 23)
         .expect("a budget that stops some vectors but not all");
     for v in variants() {
-        let pass = PrimaryPass::new(
-            ctx(),
-            &PrimaryOptions {
-                tracer: PrimaryTracer::Mft,
-                variant: Some(v),
-                iteration_budget: budget,
-                ..PrimaryOptions::default()
-            },
-        )
-        .unwrap();
-        let gpu_scene = GpuScene::new(ctx(), &case.scene, &case.bvh).unwrap();
-        let bytes = u64::from(37 * 23u32) * size_of::<GBufferTexel>() as u64;
-        let gbuffer = empty_storage_buffer(ctx(), "G-buffer", bytes, wgpu::BufferUsages::empty()).unwrap();
-        let status = PrimaryPass::status_buffer(&ctx().device);
-        let camera = penumbra::gpu::kernel::uniform_buffer(ctx(), "camera", &case.cam);
-        let mut encoder = ctx().device.create_command_encoder(&Default::default());
-        let groups = pass.workgroups(ctx(), 37, 23).unwrap();
-        pass.record(
-            &ctx().device,
-            &mut encoder,
-            &gpu_scene,
-            &camera,
-            &gbuffer,
-            &status,
-            groups,
-            None,
-        )
-        .unwrap();
-        ctx().queue.submit([encoder.finish()]);
-        let reported = pass.read_status(ctx(), &status).unwrap();
+        let (pass, gpu_scene, gbuffer, reported) = overflow_pixels(&case, v, budget);
         assert_eq!(
-            u64::from(reported.overflow_pixels),
-            twin.overflow_pixels,
+            reported, twin.overflow_pixels,
             "{v}: pixels reported out of iterations, GPU vs CPU twin"
         );
         let err = pass
@@ -433,7 +488,7 @@ fn running_out_of_iterations_is_an_error() {
         );
         eprintln!(
             "{v}: {} of {} pixels out of {budget} iterations: {err}",
-            reported.overflow_pixels,
+            reported,
             37 * 23
         );
     }
