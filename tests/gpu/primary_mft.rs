@@ -367,6 +367,12 @@ fn counters_by_hand_small_triangle_in_one_frustum() {
     }
 }
 
+/// The built-in playground from its view's camera at `size`, default BVH.
+fn playground(size: (u32, u32)) -> Case {
+    let (scene, view) = embedded("playground");
+    Case::new("playground", scene, &view.camera, &BvhSettings::default(), size)
+}
+
 /// The multi-frusta pass with vector `v` and `budget` iterations on `case`, recorded once:
 /// the pixels it reports out of iterations (with the pass, scene and G-buffer, to run again).
 fn overflow_pixels(case: &Case, v: VectorVariant, budget: u32) -> (PrimaryPass, GpuScene, wgpu::Buffer, u64) {
@@ -410,14 +416,7 @@ fn overflow_pixels(case: &Case, v: VectorVariant, budget: u32) -> (PrimaryPass, 
 /// more than `p`. So a kernel that does more (or less) in one pass than the twin fails.
 #[test]
 fn every_vector_runs_its_twins_passes() {
-    let (scene, view) = embedded("playground");
-    let case = Case::new(
-        "playground",
-        scene,
-        &view.camera,
-        &BvhSettings::default(),
-        (69, 41),
-    );
+    let case = playground((69, 41));
     let (bw, bh) = (case.cam.width.div_ceil(16), case.cam.height.div_ceil(16));
     let mut passes: Vec<u32> = (0..bh)
         .flat_map(|by| (0..bw).map(move |bx| (bx, by)))
@@ -457,14 +456,7 @@ fn every_vector_runs_its_twins_passes() {
 /// and the pass turns that into an error, never a silently incomplete G-buffer.
 #[test]
 fn running_out_of_iterations_is_an_error() {
-    let (scene, view) = embedded("playground");
-    let case = Case::new(
-        "playground",
-        scene,
-        &view.camera,
-        &BvhSettings::default(),
-        (37, 23),
-    );
+    let case = playground((37, 23));
     // The smallest budget that stops some vectors but not all, so that the count is a real check.
     let shading = case.shading();
     let (budget, twin) = [5, 10, 20, 40, 80, 160, 320]
