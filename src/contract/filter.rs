@@ -5,7 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 
 /// The filter kernel is `shaders/filter.wgsl` (entry point `main`, workgroup
-/// [`WORKGROUP_SIZE`]² invocations, one per pixel), assembled with the window of
+/// [`WORKGROUP_SIZE`]² invocations, [`FILTER_PIXELS_PER_INVOCATION`] pixels each), assembled with the window of
 /// `shaders/shared/filter_window.wgsl` by [`crate::shaders::assemble`].
 ///
 /// Bindings, group 0: 0 `filter_params: FilterParams` (uniform), 1 `values:
@@ -16,12 +16,18 @@ use bytemuck::{Pod, Zeroable};
 /// (read-write storage, the output, row-major).
 pub const FILTER_KERNEL: &str = "filter";
 
+/// Horizontally adjacent pixels each invocation of the filter kernel filters (their windows
+/// share most taps: 40 texel pairs fetched for 4 pixels instead of 100): dispatch
+/// `ceil(width / (8 · 4)) × ceil(height / 8)` workgroups. The kernel is written for 4 (a
+/// naga test checks its constant of this name).
+pub const FILTER_PIXELS_PER_INVOCATION: u32 = 4;
+
 /// Every tap of the window: bit `(dy + 2)·5 + (dx + 2)` for `dx, dy` in `−2 ..= 2`
 /// (`FULL_WINDOW` of `shaders/shared/filter_window.wgsl`).
 pub const FULL_WINDOW: u32 = (1 << 25) - 1;
 
-/// The kernel's workgroup is `WORKGROUP_SIZE × WORKGROUP_SIZE`; dispatch
-/// `ceil(width / 8) × ceil(height / 8)` workgroups. Equal to `WG_SIZE` in the WGSL
+/// The kernel's workgroup is `WORKGROUP_SIZE × WORKGROUP_SIZE` invocations (see
+/// [`FILTER_PIXELS_PER_INVOCATION`] for the dispatch). Equal to `WG_SIZE` in the WGSL
 /// (a test checks).
 pub const WORKGROUP_SIZE: u32 = super::groups::PIXEL_GROUP;
 

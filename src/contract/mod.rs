@@ -54,8 +54,12 @@ mod tests {
             ),
             ("WORD_TRIANGLE_TESTS", u(counters::WORD_TRIANGLE_TESTS)),
             ("WORD_LOOP_CUT", u(counters::WORD_LOOP_CUT)),
-            // shared/filter_window
+            // shared/filter_window, filter
             ("FULL_WINDOW", U32(filter::FULL_WINDOW)),
+            (
+                "FILTER_PIXELS_PER_INVOCATION",
+                U32(filter::FILTER_PIXELS_PER_INVOCATION),
+            ),
             // shared/groups
             ("PIXEL_GROUP", U32(groups::PIXEL_GROUP)),
             ("LINE_GROUP", U32(groups::LINE_GROUP)),

@@ -10,7 +10,7 @@ use super::kernel::{Checks, Kernel, buffer, texture, uniform_buffer_on};
 use super::pixel_buffers::PixelBuffers;
 use super::refine::{RefineBuffers, Refinement};
 use super::{GpuContext, GpuScene, GpuTimer, ShadowTracer, Tracer, TracerOptions};
-use crate::contract::filter::{FILTER_KERNEL, FilterParams};
+use crate::contract::filter::{FILTER_KERNEL, FILTER_PIXELS_PER_INVOCATION, FilterParams};
 use crate::contract::groups::PIXEL_GROUP;
 use crate::contract::layout::ShadowParams;
 use crate::contract::refine::selection_params;
@@ -64,8 +64,9 @@ impl ShadowStages {
     }
 
     /// Records the visibility stage (`params`: its uniform, see [`VisibilityStage`]) and,
-    /// with `filter`, the copies of the filter's inputs into textures and the filter, one
-    /// invocation per pixel in 8×8 workgroups, timed as `shade` and `filter` (with the
+    /// with `filter`, the copies of the filter's inputs into textures and the filter (the
+    /// visibility stage one invocation per pixel, the filter one per
+    /// [`FILTER_PIXELS_PER_INVOCATION`] pixels of a row, in 8×8 workgroups), timed as `shade` and `filter` (with the
     /// copies) when a timer is given. Returns the buffer that holds the final values:
     /// `pixels.filtered`, or `pixels.values` without the filter.
     pub fn record_visibility_and_filter<'p>(
@@ -139,7 +140,11 @@ impl ShadowStages {
             });
         }
         pixels.record_filter_input_copies(encoder);
-        self.filter.record(encoder, "filter", &bind, end, groups);
+        let filter_groups = (
+            pixels.size.0.div_ceil(PIXEL_GROUP * FILTER_PIXELS_PER_INVOCATION),
+            pixels.size.1.div_ceil(PIXEL_GROUP),
+        );
+        self.filter.record(encoder, "filter", &bind, end, filter_groups);
         Ok(&pixels.filtered)
     }
 
