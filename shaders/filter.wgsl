@@ -102,22 +102,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var p1 = start_pixel(m.t3);
     var p2 = start_pixel(m.t4);
     var p3 = start_pixel(m.t5);
-    {
-        let a = load_row(x, y - 2);
-        let b = load_row(x, y + 2);
-        add_row_pairs(&p0, a.t0, a.t1, a.t2, a.t3, a.t4, b.t0, b.t1, b.t2, b.t3, b.t4, 0.5);
-        add_row_pairs(&p1, a.t1, a.t2, a.t3, a.t4, a.t5, b.t1, b.t2, b.t3, b.t4, b.t5, 0.5);
-        add_row_pairs(&p2, a.t2, a.t3, a.t4, a.t5, a.t6, b.t2, b.t3, b.t4, b.t5, b.t6, 0.5);
-        add_row_pairs(&p3, a.t3, a.t4, a.t5, a.t6, a.t7, b.t3, b.t4, b.t5, b.t6, b.t7, 0.5);
-    }
-    {
-        let a = load_row(x, y - 1);
-        let b = load_row(x, y + 1);
-        add_row_pairs(&p0, a.t0, a.t1, a.t2, a.t3, a.t4, b.t0, b.t1, b.t2, b.t3, b.t4, 1.0);
-        add_row_pairs(&p1, a.t1, a.t2, a.t3, a.t4, a.t5, b.t1, b.t2, b.t3, b.t4, b.t5, 1.0);
-        add_row_pairs(&p2, a.t2, a.t3, a.t4, a.t5, a.t6, b.t2, b.t3, b.t4, b.t5, b.t6, 1.0);
-        add_row_pairs(&p3, a.t3, a.t4, a.t5, a.t6, a.t7, b.t3, b.t4, b.t5, b.t6, b.t7, 1.0);
-    }
+    add_row_pairs_of_four(&p0, &p1, &p2, &p3, load_row(x, y - 2), load_row(x, y + 2), 0.5);
+    add_row_pairs_of_four(&p0, &p1, &p2, &p3, load_row(x, y - 1), load_row(x, y + 1), 1.0);
     // Row y: dx = -2 (weight 1/2) and dx = -1 (weight 1), each with its mirror.
     add_pair(&p0, m.t0, m.t4, 0.5);
     add_pair(&p0, m.t1, m.t3, 1.0);
@@ -139,6 +125,23 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if x + 3 < i32(filter_params.width) {
         filtered[first + 3u] = p3.sum / p3.weight_sum;
     }
+}
+
+// Adds to pixels p0 ..= p3 (x ..= x + 3) the pairs of rows `a` (y + dy, dy < 0) and `b`
+// (y - dy) of their windows, `w` the rows' weight (see add_row_pairs).
+fn add_row_pairs_of_four(
+    p0: ptr<function, Pixel>,
+    p1: ptr<function, Pixel>,
+    p2: ptr<function, Pixel>,
+    p3: ptr<function, Pixel>,
+    a: Row,
+    b: Row,
+    w: f32,
+) {
+    add_row_pairs(p0, a.t0, a.t1, a.t2, a.t3, a.t4, b.t0, b.t1, b.t2, b.t3, b.t4, w);
+    add_row_pairs(p1, a.t1, a.t2, a.t3, a.t4, a.t5, b.t1, b.t2, b.t3, b.t4, b.t5, w);
+    add_row_pairs(p2, a.t2, a.t3, a.t4, a.t5, a.t6, b.t2, b.t3, b.t4, b.t5, b.t6, w);
+    add_row_pairs(p3, a.t3, a.t4, a.t5, a.t6, a.t7, b.t3, b.t4, b.t5, b.t6, b.t7, w);
 }
 
 // Adds to pixel `p` the five pairs of one row pair of its window, dx = -2 ..= 2: `a0 ..= a4`
