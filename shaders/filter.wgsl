@@ -2,8 +2,8 @@
 // depth, normal and visibility whose mirror image through the pixel is used too.
 // Each invocation filters FILTER_PIXELS_PER_INVOCATION = 4 horizontally adjacent pixels, whose windows share most taps: 40 taps
 // fetched for four pixels instead of 100 (the filter 1.6-2x faster on both lavapipe drivers, README "Performance"). Dispatched by
-// the filter pass after shading, ceil(width / (4 · PIXEL_GROUP)) × ceil(height / PIXEL_GROUP) workgroups; CPU twin:
-// src/reference/filter.rs.
+// the filter pass after shading, ceil(width / (4 · PIXEL_GROUP)) × ceil(height / PIXEL_GROUP) workgroups.
+// CPU twin: src/reference/filter.rs.
 
 #import shared/filter_window
 #import shared/groups

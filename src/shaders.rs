@@ -508,6 +508,7 @@ mod tests {
                 .unwrap()
                 .lines()
                 .take_while(|l| l.starts_with("//"))
+                .map(|l| l.trim_start_matches('/').trim())
                 .collect::<Vec<_>>()
                 .join(" ");
             let Some((_, rest)) = opening.split_once("CPU twin: ") else {
