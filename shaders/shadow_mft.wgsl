@@ -48,7 +48,12 @@ const BOUNDS_PAD: f32 = 1.0 / 262144.0;  // 2^-18
 @group(0) @binding(1) var<storage, read> nodes: array<u32>;
 @group(0) @binding(2) var<storage, read> triangles: array<u32>;
 @group(0) @binding(3) var<storage, read> gbuffer: array<GBufferTexel>;
-@group(0) @binding(4) var<storage, read> light_points: array<vec4<f32>>;
+// The 16 sets' light points, set j at [16 j, 16 j + 16) (sampling::light_points). A uniform
+// buffer, not storage: lavapipe gathers a uniform array's per-lane elements with vector
+// code, where a storage load that differs per lane runs a loop over the lanes (README
+// "Setting up the frusta").
+const LIGHT_SAMPLES: u32 = 256u;
+@group(0) @binding(4) var<uniform> light_points: array<vec4<f32>, LIGHT_SAMPLES>;
 @group(0) @binding(5) var<storage, read_write> masks: array<u32>;
 @group(0) @binding(6) var<storage, read_write> state: array<u32>;
 // [WORD_STATUS]: tiles suspended by this dispatch; [1..6]: the Table 1 counters
@@ -112,7 +117,7 @@ fn is_done() -> bool {
 }
 
 // Same rules as reference::shadow_per_ray::initial_mask.
-fn setup_frustum(texel: GBufferTexel, sample_set: u32, inside: bool) {
+fn setup_frustum(texel: GBufferTexel, inside: bool) {
     f_origin = texel.origin;
     f_geo = texel.geo_normal;
     let o = f_origin;
@@ -124,11 +129,14 @@ fn setup_frustum(texel: GBufferTexel, sample_set: u32, inside: bool) {
     f_lo = vec2<f32>(0.0);
     f_hi = vec2<f32>(1.0);
     set_sides();
-    var below = 0u;
-    for (var j = 0u; j < 16u; j++) {
-        let d = light_points[sample_set * 16u + j].xyz - o;
-        below |= select(0u, 1u << j, dot(f_geo, d) <= 0.0);
-    }
+    let lf = light_frame();
+    // Unrolled on purpose: every loop iteration counts towards lavapipe's limit.
+    let below = setup_sample(0u, lf) | setup_sample(1u, lf) | setup_sample(2u, lf)
+        | setup_sample(3u, lf) | setup_sample(4u, lf) | setup_sample(5u, lf)
+        | setup_sample(6u, lf) | setup_sample(7u, lf) | setup_sample(8u, lf)
+        | setup_sample(9u, lf) | setup_sample(10u, lf) | setup_sample(11u, lf)
+        | setup_sample(12u, lf) | setup_sample(13u, lf) | setup_sample(14u, lf)
+        | setup_sample(15u, lf);
     if !inside || texel.depth <= 0.0 {
         f_occluded = MASK_SKY;
     } else if dot(params.light_normal, o - corner(0u)) <= 0.0 {
@@ -137,14 +145,14 @@ fn setup_frustum(texel: GBufferTexel, sample_set: u32, inside: bool) {
         f_occluded = below;
     }
     f_initial = f_occluded;
-    let lf = light_frame();
-    // Unrolled on purpose: every loop iteration counts towards lavapipe's limit.
-    f_st[0] = sample_st(0u, lf); f_st[1] = sample_st(1u, lf); f_st[2] = sample_st(2u, lf);
-    f_st[3] = sample_st(3u, lf); f_st[4] = sample_st(4u, lf); f_st[5] = sample_st(5u, lf);
-    f_st[6] = sample_st(6u, lf); f_st[7] = sample_st(7u, lf); f_st[8] = sample_st(8u, lf);
-    f_st[9] = sample_st(9u, lf); f_st[10] = sample_st(10u, lf); f_st[11] = sample_st(11u, lf);
-    f_st[12] = sample_st(12u, lf); f_st[13] = sample_st(13u, lf); f_st[14] = sample_st(14u, lf);
-    f_st[15] = sample_st(15u, lf);
+}
+
+// Sample j of this lane's set (set g_lane): its light coordinates into f_st[j], and bit j
+// if its ray starts below the receiver's tangent plane (reference::shadow_per_ray::initial_mask).
+fn setup_sample(j: u32, lf: LightFrame) -> u32 {
+    let p = light_points[g_lane * 16u + j].xyz;
+    f_st[j] = point_st(p, lf);
+    return select(0u, 1u << j, dot(f_geo, p - f_origin) <= 0.0);
 }
 
 // The side planes through the origin and the edges of f_corner (inward
@@ -195,10 +203,6 @@ fn light_frame() -> LightFrame {
     let n = cross(eu, ev);
     let inv = 1.0 / dot(n, n);
     return LightFrame(c0, eu, ev, cross(ev, n) * inv, cross(n, eu) * inv);
-}
-
-fn sample_st(j: u32, lf: LightFrame) -> vec2<f32> {
-    return point_st(light_points[g_lane * 16u + j].xyz, lf);
 }
 
 fn point_st(p: vec3<f32>, lf: LightFrame) -> vec2<f32> {
@@ -580,7 +584,7 @@ fn main(ids: Vec16Ids) {
         state[base + ST_STATUS] = 0u;
     }
     // Outside the image or idle: every lane done (MASK_SKY), so no ballot counts it.
-    setup_frustum(texel, g_lane, inside);
+    setup_frustum(texel, inside);
 
     var cand_tri: BvhTriangle;  // transposed leaves: triangle cursor - 1, loaded once for all its candidates
     var cut = false;  // a loop of this invocation was ended by the driver

@@ -23,8 +23,8 @@ pub mod suspend;
 /// Loop iterations a vector (or ray) runs per dispatch before it suspends (shadow
 /// kernels) or stops and reports its pixels (primary kernels); below lavapipe's
 /// 65,535-iteration loop limit with room for the kernels' other loops: the MFT shadow
-/// kernel adds 16 (the samples below the horizon) and at most 64 each to read and to save
-/// a stack of 64 (60,144 in all; its side-plane setup is unrolled, so shrinking loops
+/// kernel adds at most 64 each to read and to save a stack of 64 (60,128 in all; its
+/// per-sample setup and its side planes are unrolled, so setting up and shrinking loop
 /// nowhere). A loop that ends early all the same is reported ([`crate::Error::LoopCut`]).
 pub const ITERATION_BUDGET: u32 = 60_000;
 
@@ -94,6 +94,7 @@ mod tests {
             ("SHRINK_FLAG", U32(shadow::SHRINK_FLAG)),
             ("SHRINK_MARGIN", F32(shadow::SHRINK_MARGIN)),
             ("BOUNDS_PAD", F32(shadow::BOUNDS_PAD)),
+            ("LIGHT_SAMPLES", u(crate::sampling::SAMPLES)),
             // shadow_packet
             ("PACKET_STATE_WORDS", u(shadow::PACKET_STATE_WORDS)),
         ]

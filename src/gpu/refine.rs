@@ -44,7 +44,8 @@ pub struct RefineBuffers<'a> {
     /// The frame's per-pixel buffers: the shade pass's outputs and the G-buffer are read,
     /// `filtered` is overwritten at the refined pixels.
     pub pixels: &'a PixelBuffers,
-    /// The 256 interleaved light points, set order.
+    /// The 256 interleaved light points, set order
+    /// ([`crate::gpu::ShadowTracer::light_points_buffer`]: `STORAGE | UNIFORM`).
     pub light_points: &'a wgpu::Buffer,
 }
 

@@ -136,18 +136,25 @@ impl ShadowTracer {
 
     /// The light points of `light` that the kernel reads, uploaded: the 16 interleaved
     /// sets of [`crate::sampling::light_points`], or the reference tracer's own
-    /// ([`crate::sampling::reference_light_points`]); `vec4` each, w unused.
+    /// ([`crate::sampling::reference_light_points`]); `vec4` each, w unused. The 256 of
+    /// the interleaved sets are also a uniform buffer (the MFT kernel reads them as one).
     pub fn light_points_buffer(&self, device: &wgpu::Device, light: &QuadLight) -> wgpu::Buffer {
         use wgpu::util::DeviceExt;
-        let points = match self.tracer {
-            Tracer::Reference { rays } => crate::sampling::reference_light_points(light, rays),
-            _ => crate::sampling::light_points(light),
+        let (points, usage) = match self.tracer {
+            Tracer::Reference { rays } => (
+                crate::sampling::reference_light_points(light, rays),
+                wgpu::BufferUsages::STORAGE,
+            ),
+            _ => (
+                crate::sampling::light_points(light),
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::UNIFORM,
+            ),
         };
         let points: Vec<[f32; 4]> = points.iter().map(|p| p.extend(0.0).to_array()).collect();
         device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("light points"),
             contents: bytemuck::cast_slice(&points),
-            usage: wgpu::BufferUsages::STORAGE,
+            usage,
         })
     }
 
@@ -415,7 +422,9 @@ impl ShadowTracer {
 pub struct ShadowImage<'a> {
     /// `array<GBufferTexel>`, width × height.
     pub gbuffer: &'a wgpu::Buffer,
-    /// [`ShadowTracer::light_point_count`] `vec4`s (w unused).
+    /// [`ShadowTracer::light_point_count`] `vec4`s (w unused), as
+    /// [`ShadowTracer::light_points_buffer`] makes them: the MFT kernel binds them as a
+    /// uniform buffer, so its buffer needs `UNIFORM` as well as `STORAGE`.
     pub light_points: &'a wgpu::Buffer,
     /// `array<u32>`, one mask per pixel (`COPY_DST`: the per-ray tracers clear it first).
     pub masks: &'a wgpu::Buffer,

@@ -501,7 +501,8 @@ fn a_suspended_tile_saves_the_state_the_twin_saves() {
     let light: Vec<[f32; 4]> = points.iter().map(|p| p.extend(0.0).to_array()).collect();
     let usage = wgpu::BufferUsages::empty();
     let gbuffer = penumbra::gpu::storage_buffer(ctx(), "G-buffer", &texels, usage).unwrap();
-    let light_points = penumbra::gpu::storage_buffer(ctx(), "light points", &light, usage).unwrap();
+    let light_points =
+        penumbra::gpu::storage_buffer(ctx(), "light points", &light, wgpu::BufferUsages::UNIFORM).unwrap();
     let masks = penumbra::gpu::empty_storage_buffer(ctx(), "masks", u64::from(w * h) * 4, usage).unwrap();
     let (tiles_x, tiles_y) = (w.div_ceil(4), h.div_ceil(4));
     for budget in [3, 40] {

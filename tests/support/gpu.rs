@@ -165,7 +165,8 @@ pub fn try_trace_masks_on(
         .collect();
     let usage = wgpu::BufferUsages::empty();
     let gbuffer = storage_buffer(ctx, "G-buffer", texels, usage)?;
-    let light_points = storage_buffer(ctx, "light points", &points, usage)?;
+    // Uniform too, as ShadowTracer::light_points_buffer makes it: the MFT kernel reads it so.
+    let light_points = storage_buffer(ctx, "light points", &points, wgpu::BufferUsages::UNIFORM)?;
     let bytes = u64::from(params.width * params.height) * 4;
     let masks = empty_storage_buffer(
         ctx,
