@@ -49,9 +49,9 @@ const BOUNDS_PAD: f32 = 1.0 / 262144.0;  // 2^-18
 @group(0) @binding(2) var<storage, read> triangles: array<u32>;
 @group(0) @binding(3) var<storage, read> gbuffer: array<GBufferTexel>;
 // The 16 sets' light points, set j at [16 j, 16 j + 16) (sampling::light_points). A uniform
-// buffer, not storage: lavapipe gathers a uniform array's per-lane elements with vector
-// code, where a storage load that differs per lane runs a loop over the lanes (README
-// "Setting up the frusta").
+// buffer, not storage: Mesa 22.3 lavapipe gathers a uniform array's per-lane elements with
+// vector code, where it runs a storage load that differs per lane as a loop over the lanes
+// (README "Setting up the frusta").
 const LIGHT_SAMPLES: u32 = 256u;
 @group(0) @binding(4) var<uniform> light_points: array<vec4<f32>, LIGHT_SAMPLES>;
 @group(0) @binding(5) var<storage, read_write> masks: array<u32>;
