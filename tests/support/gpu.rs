@@ -159,14 +159,8 @@ pub fn try_trace_masks_on(
     params: &penumbra::contract::layout::ShadowParams,
 ) -> penumbra::Result<(Vec<u32>, penumbra::gpu::ShadowStats)> {
     use penumbra::gpu::{empty_storage_buffer, read_buffer, storage_buffer};
-    let points: Vec<[f32; 4]> = penumbra::sampling::light_points(&view.light)
-        .iter()
-        .map(|p| p.extend(0.0).to_array())
-        .collect();
-    let usage = wgpu::BufferUsages::empty();
-    let gbuffer = storage_buffer(ctx, "G-buffer", texels, usage)?;
-    // Uniform too, as ShadowTracer::light_points_buffer makes it: the MFT kernel reads it so.
-    let light_points = storage_buffer(ctx, "light points", &points, wgpu::BufferUsages::UNIFORM)?;
+    let gbuffer = storage_buffer(ctx, "G-buffer", texels, wgpu::BufferUsages::empty())?;
+    let light_points = pass.light_points_buffer(&ctx.device, &view.light);
     let bytes = u64::from(params.width * params.height) * 4;
     let masks = empty_storage_buffer(
         ctx,
