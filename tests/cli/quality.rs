@@ -252,6 +252,44 @@ fn bench_prints_the_table_and_its_json() {
     );
 }
 
+/// `--no-refine` leaves the refined frame out: no line for it, and null in the JSON, while
+/// the plain frame is still timed.
+#[test]
+fn bench_without_the_refined_frame_reports_none() {
+    let dir = out_dir("bench-no-refine");
+    let (ok, stdout, stderr) = penumbra(
+        &dir,
+        &[
+            "bench",
+            "playground",
+            "--size",
+            "32x32",
+            "--runs",
+            "1",
+            "--tracers",
+            "mft",
+            "--no-counters",
+            "--animate-frames",
+            "0",
+            "--no-refine",
+            "--json",
+            "b.json",
+        ],
+    );
+    assert!(ok, "bench failed:\n{stdout}\n{stderr}");
+    assert!(
+        stdout.contains("frame (mft, filtered)") && !stdout.contains("refined frame"),
+        "{stdout}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("b.json")).unwrap()).unwrap();
+    let frame = &report["cases"][0]["frame"];
+    assert!(frame["shadow_ms_median"].as_f64().unwrap() > 0.0, "{frame}");
+    for k in ["refine_ms_median", "refined_wall_ms_median", "refined_pixels"] {
+        assert!(frame[k].is_null(), "frame.{k} should be null: {frame}");
+    }
+}
+
 /// A view file with two lights benches each light as its own case (`FILE, light N`), each
 /// with its own timings, and reports them added up.
 #[test]

@@ -70,6 +70,11 @@ pub struct BenchArgs {
     /// run with the counting kernels, so they never slow the timed runs).
     #[arg(long)]
     no_counters: bool,
+    /// Skip each case's refined frame (the MFT frame again with `render --refine`, timed
+    /// after the plain frames; on the lattice it takes longer than every other run of the
+    /// case together); its figures are then left out (null in --json).
+    #[arg(long)]
+    no_refine: bool,
     /// Frames of the moving-object case per scene (the largest object that is not the
     /// whole scene circles and spins; refit/rebuild and upload ms per frame); 0: skip it.
     #[arg(long, default_value_t = 30)]
@@ -209,7 +214,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             let mut primary = Vec::new();
             // The MFT renderer's frames (the first renderer): every pass, and the wall time.
             let (mut shade, mut filter, mut wall) = (Vec::new(), Vec::new(), Vec::new());
-            let (mut refine, mut refined_wall, mut refined_pixels) = (Vec::new(), Vec::new(), 0);
+            let (mut refine, mut refined_wall, mut refined_pixels) = (Vec::new(), Vec::new(), None);
             let mut rays = 0;
             for (tracer, renderer, counting) in &renderers {
                 step += 1;
@@ -242,7 +247,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     }
                     rays = frame.masks.iter().filter(|&&m| m & MASK_SKY == 0).count() as u64 * 16;
                 }
-                if tracer_results.is_empty() {
+                if tracer_results.is_empty() && !args.no_refine {
                     let refined_settings = FrameSettings {
                         refine: true,
                         ..frame_settings
@@ -256,7 +261,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                             refine.push(frame.pass_ms("refine"));
                             refined_wall.push(wall_ms);
                         }
-                        refined_pixels = frame.refined.iter().filter(|&&r| r).count();
+                        refined_pixels = Some(frame.refined.iter().filter(|&&r| r).count());
                     }
                 }
                 let counters = match counting {
@@ -349,8 +354,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                     wall_ms_min: wall.iter().copied().fold(f64::INFINITY, f64::min),
                     wall_ms_median: median(&wall),
                     wall_ms: wall,
-                    refine_ms_median: median(&refine),
-                    refined_wall_ms_median: median(&refined_wall),
+                    refine_ms_median: (!refine.is_empty()).then(|| median(&refine)),
+                    refined_wall_ms_median: (!refined_wall.is_empty()).then(|| median(&refined_wall)),
                     refined_pixels,
                 },
                 primary: primary_results,

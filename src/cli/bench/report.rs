@@ -29,10 +29,11 @@ pub(super) struct FrameResult {
     pub(super) wall_ms_min: f64,
     pub(super) wall_ms_median: f64,
     /// The same frame with `--refine`: the refinement's GPU ms (its select, gather,
-    /// shadow and resolve dispatches), the frame's wall ms, and the pixels refined.
-    pub(super) refine_ms_median: f64,
-    pub(super) refined_wall_ms_median: f64,
-    pub(super) refined_pixels: usize,
+    /// shadow and resolve dispatches), the frame's wall ms, and the pixels refined; `None`
+    /// with `--no-refine`.
+    pub(super) refine_ms_median: Option<f64>,
+    pub(super) refined_wall_ms_median: Option<f64>,
+    pub(super) refined_pixels: Option<usize>,
 }
 
 /// One primary tracer's figures in one case.
@@ -291,12 +292,10 @@ pub(super) fn print_case(r: &CaseResult) {
         f.wall_ms_min,
         f.wall_ms_median
     );
-    outln!(
-        "  refined frame (--refine): refinement {:.1} ms GPU at {} px; wall {:.1} ms median",
-        f.refine_ms_median,
-        f.refined_pixels,
-        f.refined_wall_ms_median
-    );
+    if let (Some(ms), Some(px), Some(wall)) = (f.refine_ms_median, f.refined_pixels, f.refined_wall_ms_median)
+    {
+        outln!("  refined frame (--refine): refinement {ms:.1} ms GPU at {px} px; wall {wall:.1} ms median");
+    }
     outln!(
         "  {:<8} {:>10} {:>10} {:>8} {:>9} {:>11} {:>11} {:>11} {:>11}",
         "tracer",
