@@ -190,23 +190,28 @@ fn render_writes_every_tracer() {
     );
 }
 
+/// One MFT run of each frame, nothing else timed or counted.
+const QUICK_MFT: &[&str] = &[
+    "--runs",
+    "1",
+    "--tracers",
+    "mft",
+    "--no-counters",
+    "--animate-frames",
+    "0",
+];
+
+/// `penumbra bench playground --size 32x32 --json b.json ARGS…` in `dir`.
+fn bench_playground(dir: &Path, args: &[&str]) -> (bool, String, String) {
+    let mut all = vec!["bench", "playground", "--size", "32x32", "--json", "b.json"];
+    all.extend_from_slice(args);
+    penumbra(dir, &all)
+}
+
 #[test]
 fn bench_prints_the_table_and_its_json() {
     let dir = out_dir("bench");
-    let (ok, stdout, stderr) = penumbra(
-        &dir,
-        &[
-            "bench",
-            "playground",
-            "--size",
-            "32x32",
-            "--runs",
-            "2",
-            "--without-cr",
-            "--json",
-            "b.json",
-        ],
-    );
+    let (ok, stdout, stderr) = bench_playground(&dir, &["--runs", "2", "--without-cr"]);
     assert!(ok, "bench failed:\n{stdout}\n{stderr}");
     for row in ["mft ", "mft-no-cr", "packet", "per-ray", "packet/MFT"] {
         assert!(stdout.contains(row), "no {row} in:\n{stdout}");
@@ -257,25 +262,7 @@ fn bench_prints_the_table_and_its_json() {
 #[test]
 fn bench_without_the_refined_frame_reports_none() {
     let dir = out_dir("bench-no-refine");
-    let (ok, stdout, stderr) = penumbra(
-        &dir,
-        &[
-            "bench",
-            "playground",
-            "--size",
-            "32x32",
-            "--runs",
-            "1",
-            "--tracers",
-            "mft",
-            "--no-counters",
-            "--animate-frames",
-            "0",
-            "--no-refine",
-            "--json",
-            "b.json",
-        ],
-    );
+    let (ok, stdout, stderr) = bench_playground(&dir, &[QUICK_MFT, &["--no-refine"]].concat());
     assert!(ok, "bench failed:\n{stdout}\n{stderr}");
     assert!(
         stdout.contains("frame (mft, filtered)") && !stdout.contains("refined frame"),
@@ -302,26 +289,7 @@ fn bench_with_a_two_light_view_benches_each_light() {
     second.edge_v *= 0.5;
     let json = serde_json::json!({ "camera": view.camera, "lights": [view.light, second] });
     std::fs::write(dir.join("two.json"), json.to_string()).unwrap();
-    let (ok, stdout, stderr) = penumbra(
-        &dir,
-        &[
-            "bench",
-            "playground",
-            "--view",
-            "two.json",
-            "--size",
-            "32x32",
-            "--runs",
-            "1",
-            "--tracers",
-            "mft",
-            "--no-counters",
-            "--animate-frames",
-            "0",
-            "--json",
-            "b.json",
-        ],
-    );
+    let (ok, stdout, stderr) = bench_playground(&dir, &[QUICK_MFT, &["--view", "two.json"]].concat());
     assert!(ok, "bench failed:\n{stdout}\n{stderr}");
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("b.json")).unwrap()).unwrap();
